@@ -1,0 +1,34 @@
+//! Brute force: every primitive for every ray. The reference every other accelerator is tested against.
+
+use super::policy::HitPolicy;
+use super::prims::{Hit, Prims};
+use crate::geometry::ray::Ray;
+
+/// Tests all primitives, in id order.
+#[derive(Clone, Copy, Debug)]
+pub struct Brute<'a> {
+    prims: Prims<'a>,
+}
+
+impl<'a> Brute<'a> {
+    /// Wraps the scene's primitives; nothing to build.
+    pub fn new(prims: Prims<'a>) -> Self {
+        Brute { prims }
+    }
+
+    /// The one traversal: all ids, planes included; `hit.t` is the upper limit and shrinks on each hit.
+    #[inline]
+    pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        let mut found = false;
+        for id in 0..self.prims.total() {
+            if let Some((t, u, v)) = self.prims.intersect(id, ray, t_min, hit.t) {
+                *hit = Hit { t, prim: id, u, v };
+                found = true;
+                if P::ANY {
+                    break;
+                }
+            }
+        }
+        found
+    }
+}

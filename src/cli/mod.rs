@@ -1,0 +1,41 @@
+//! Command-line interface: parses arguments with clap and calls the library. Every failure is one line on
+//! stderr, `whitted: path:line:col: message`, and exit status 1; clap's usage errors exit with 2.
+
+mod info;
+mod render;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// A data-oriented SIMD CPU Whitted ray tracer for .p3f / NFF / PLY / OBJ scenes.
+#[derive(Parser)]
+#[command(name = "whitted", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Print what a scene holds: primitive counts, lights, materials, camera, bounds and load time.
+    Info(info::InfoArgs),
+    /// Render a scene (the built-in default scene if none is given) to an image.
+    Render(render::RenderArgs),
+}
+
+/// Runs the command line and turns errors into a message and an exit status.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Info(args) => info::run(&args),
+        Command::Render(args) => render::run(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("whitted: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,68 @@
+//! Light samples: the points a shadow ray aims at.
+
+use glam::Vec3;
+
+use crate::scene::Scene;
+
+/// A point that emits light, with the colour it contributes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSample {
+    /// Where the light is.
+    pub position: Vec3,
+    /// What it emits (no distance falloff).
+    pub color: Vec3,
+}
+
+/// The fixed light samples of a scene: every point light, and each quad light as grid × grid point lights
+/// at the centres of its cells, each of colour / grid² (the course's regular sampling: bands in the
+/// penumbra, no noise).
+pub fn regular_samples(scene: &Scene) -> Vec<LightSample> {
+    let mut out: Vec<LightSample> = scene
+        .point_lights
+        .iter()
+        .map(|l| LightSample {
+            position: l.position,
+            color: l.color,
+        })
+        .collect();
+    for q in &scene.area_lights {
+        let n = q.grid;
+        let color = q.color / (n * n) as f32;
+        for j in 0..n {
+            for i in 0..n {
+                let (s, t) = ((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                out.push(LightSample {
+                    position: q.point(s, t),
+                    color,
+                });
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Camera, QuadLight};
+
+    #[test]
+    fn quad_grid_samples_sum_to_the_light() {
+        let mut scene = Scene::new(Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 45.0, 8, 8));
+        scene.add_point_light(Vec3::ONE, Vec3::ONE);
+        scene.area_lights.push(QuadLight {
+            corner: Vec3::ZERO,
+            edge_u: Vec3::X * 2.0,
+            edge_v: Vec3::Z * 2.0,
+            color: Vec3::splat(9.0),
+            grid: 3,
+        });
+        let s = regular_samples(&scene);
+        assert_eq!(s.len(), 1 + 9);
+        let total: Vec3 = s[1..].iter().map(|l| l.color).sum();
+        assert!((total - Vec3::splat(9.0)).length() < 1e-5);
+        assert!((s[1].position - Vec3::new(1.0 / 3.0, 0.0, 1.0 / 3.0)).length() < 1e-6);
+        let centre: Vec3 = s[1..].iter().map(|l| l.position).sum::<Vec3>() / 9.0;
+        assert!((centre - Vec3::new(1.0, 0.0, 1.0)).length() < 1e-6);
+    }
+}

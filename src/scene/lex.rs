@@ -1,0 +1,456 @@
+//! A streaming tokenizer for the whitespace-separated text formats (p3f, NFF, ascii PLY, OBJ).
+//!
+//! It reads through a fixed buffer, so a 30 MB mesh never becomes a 30 MB `String`, let alone a token
+//! vector per line; gzip is recognised by its magic bytes, not by the file name. Every token carries its
+//! line and column so that every error can say `path:line:col`.
+
+use std::fs::File;
+use std::io::{self, BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
+
+use flate2::bufread::MultiGzDecoder;
+use glam::Vec3;
+
+use crate::error::{Error, Result};
+
+const BUFFER_SIZE: usize = 1 << 16;
+/// No token of any of our formats is this long; binary garbage usually is.
+const MAX_TOKEN: usize = 1024;
+
+/// One token: a run of bytes between whitespace, valid until the next call that advances the lexer.
+#[derive(Clone, Copy, Debug)]
+pub struct Tok {
+    start: usize,
+    len: usize,
+    /// 1-based line of the token's first byte.
+    pub line: u32,
+    /// 1-based column (in bytes) of the token's first byte.
+    pub col: u32,
+}
+
+/// The streaming tokenizer. `#` starts a comment to the end of the line.
+pub struct Lexer {
+    path: PathBuf,
+    // One dynamic call per buffer refill (64 KiB), never per token.
+    reader: Box<dyn Read + Send>,
+    buf: Vec<u8>,
+    pos: usize,
+    end: usize,
+    eof: bool,
+    /// Absolute offset of `buf[0]` in the decompressed stream.
+    consumed: u64,
+    line: u32,
+    /// Absolute offset of the first byte of the current line.
+    line_start: u64,
+    peeked: Option<Tok>,
+}
+
+/// Opens a file for reading, transparently decompressing gzip (recognised by its magic bytes).
+pub fn open(path: &Path) -> Result<Box<dyn Read + Send>> {
+    let file = File::open(path).map_err(|e| Error::file(path, format!("cannot open: {}", io_reason(&e))))?;
+    if file.metadata().map(|m| m.is_dir()).unwrap_or(false) {
+        return Err(Error::file(path, "cannot open: it is a directory"));
+    }
+    let mut reader = BufReader::with_capacity(BUFFER_SIZE, file);
+    let head = reader
+        .fill_buf()
+        .map_err(|e| Error::file(path, format!("cannot read: {}", io_reason(&e))))?;
+    if head.starts_with(&[0x1f, 0x8b]) {
+        Ok(Box::new(MultiGzDecoder::new(reader)))
+    } else {
+        Ok(Box::new(reader))
+    }
+}
+
+/// The text of an I/O error without Rust's "(os error 2)" suffix.
+pub fn io_reason(e: &io::Error) -> String {
+    let s = e.to_string();
+    match s.find(" (os error") {
+        Some(i) => s[..i].to_string(),
+        None => s,
+    }
+}
+
+/// Shows a found token in an error message: quoted, escaped, and cut short if long.
+pub fn show(bytes: &[u8]) -> String {
+    let text = String::from_utf8_lossy(&bytes[..bytes.len().min(40)]);
+    let mut shown = format!("{text:?}");
+    if bytes.len() > 40 {
+        shown.push('…');
+    }
+    shown
+}
+
+fn is_space(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | b'\r' | b'\n' | 0x0b | 0x0c)
+}
+
+impl Lexer {
+    /// Opens `path` (gzipped or not) for tokenizing.
+    pub fn open(path: &Path) -> Result<Self> {
+        Ok(Self::new(path, open(path)?))
+    }
+
+    /// Tokenizes `reader`; `path` is only used in error messages.
+    pub fn new(path: &Path, reader: Box<dyn Read + Send>) -> Self {
+        Lexer {
+            path: path.to_path_buf(),
+            reader,
+            buf: vec![0; BUFFER_SIZE],
+            pos: 0,
+            end: 0,
+            eof: false,
+            consumed: 0,
+            line: 1,
+            line_start: 0,
+            peeked: None,
+        }
+    }
+
+    /// The file being read.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Moves the bytes from `keep` on to the front of the buffer and reads more after them.
+    /// Returns false at the end of the data.
+    fn refill(&mut self, keep: usize) -> Result<bool> {
+        if self.eof {
+            return Ok(false);
+        }
+        self.buf.copy_within(keep..self.end, 0);
+        self.consumed += keep as u64;
+        self.pos -= keep;
+        self.end -= keep;
+        loop {
+            match self.reader.read(&mut self.buf[self.end..]) {
+                Ok(0) => {
+                    self.eof = true;
+                    return Ok(false);
+                }
+                Ok(n) => {
+                    self.end += n;
+                    return Ok(true);
+                }
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+                Err(e) => {
+                    let (line, col) = self.position();
+                    return Err(Error::at(
+                        &self.path,
+                        line,
+                        col,
+                        format!("cannot read: {} (truncated or corrupt file?)", io_reason(&e)),
+                    ));
+                }
+            }
+        }
+    }
+
+    /// Line and column of the read position.
+    pub fn position(&self) -> (u32, u32) {
+        let abs = self.consumed + self.pos as u64;
+        (self.line, (abs - self.line_start + 1) as u32)
+    }
+
+    /// The next token, or `None` at the end of the data.
+    pub fn next_token(&mut self) -> Result<Option<Tok>> {
+        if let Some(tok) = self.peeked.take() {
+            return Ok(Some(tok));
+        }
+        // Skip whitespace and comments.
+        loop {
+            if self.pos == self.end && !self.refill(self.pos)? {
+                return Ok(None);
+            }
+            let b = self.buf[self.pos];
+            if b == b'\n' {
+                self.pos += 1;
+                self.line += 1;
+                self.line_start = self.consumed + self.pos as u64;
+            } else if is_space(b) {
+                self.pos += 1;
+            } else if b == b'#' {
+                while self.pos < self.end || self.refill(self.pos)? {
+                    if self.buf[self.pos] == b'\n' {
+                        break;
+                    }
+                    self.pos += 1;
+                }
+            } else {
+                break;
+            }
+        }
+        let (line, col) = self.position();
+        let mut start = self.pos;
+        loop {
+            if self.pos == self.end {
+                let kept = self.pos - start;
+                if !self.refill(start)? {
+                    start = self.pos - kept;
+                    break;
+                }
+                start = 0;
+            }
+            let b = self.buf[self.pos];
+            if is_space(b) || b == b'#' {
+                break;
+            }
+            self.pos += 1;
+            if self.pos - start > MAX_TOKEN {
+                return Err(Error::at(
+                    &self.path,
+                    line,
+                    col,
+                    format!(
+                        "expected a keyword or a number, found {} (binary data in a text file?)",
+                        show(&self.buf[start..self.pos])
+                    ),
+                ));
+            }
+        }
+        Ok(Some(Tok {
+            start,
+            len: self.pos - start,
+            line,
+            col,
+        }))
+    }
+
+    /// The next token without consuming it.
+    pub fn peek(&mut self) -> Result<Option<Tok>> {
+        if self.peeked.is_none() {
+            self.peeked = self.next_token()?;
+        }
+        Ok(self.peeked)
+    }
+
+    /// The bytes of a token just returned by `next` or `peek`.
+    pub fn text(&self, tok: &Tok) -> &[u8] {
+        &self.buf[tok.start..tok.start + tok.len]
+    }
+
+    /// An error at a token.
+    pub fn error_at(&self, tok: &Tok, message: impl Into<String>) -> Error {
+        Error::at(&self.path, tok.line, tok.col, message)
+    }
+
+    /// An error at the read position (used at the end of the data).
+    pub fn error_here(&self, message: impl Into<String>) -> Error {
+        let (line, col) = self.position();
+        Error::at(&self.path, line, col, message)
+    }
+
+    /// The next token, or an error saying that `what` was expected at the end of the file.
+    pub fn expect_token(&mut self, what: &str) -> Result<Tok> {
+        match self.next_token()? {
+            Some(tok) => Ok(tok),
+            None => Err(self.error_here(format!("expected {what}, found the end of the file"))),
+        }
+    }
+
+    /// The next token, which must be exactly `word`.
+    pub fn expect_word(&mut self, word: &str, context: &str) -> Result<Tok> {
+        let tok = self.expect_token(&format!("\"{word}\" {context}"))?;
+        if self.text(&tok) != word.as_bytes() {
+            return Err(self.error_at(
+                &tok,
+                format!("expected \"{word}\" {context}, found {}", show(self.text(&tok))),
+            ));
+        }
+        Ok(tok)
+    }
+
+    /// A finite number for `what` (NaN and infinities are errors: they poison every later computation).
+    pub fn expect_f32(&mut self, what: &str) -> Result<f32> {
+        let tok = self.expect_token(&format!("a number for {what}"))?;
+        let text = self.text(&tok);
+        match parse_f32(text) {
+            Some(v) if v.is_finite() => Ok(v),
+            Some(_) => Err(self.error_at(
+                &tok,
+                format!("expected a finite number for {what}, found {}", show(text)),
+            )),
+            None => Err(self.error_at(
+                &tok,
+                format!("expected a number for {what}, found {}", show(text)),
+            )),
+        }
+    }
+
+    /// Three finite numbers.
+    pub fn expect_vec3(&mut self, what: &str) -> Result<Vec3> {
+        Ok(Vec3::new(
+            self.expect_f32(what)?,
+            self.expect_f32(what)?,
+            self.expect_f32(what)?,
+        ))
+    }
+
+    /// A whole number in `0..=max`.
+    pub fn expect_uint(&mut self, what: &str, max: u64) -> Result<u64> {
+        let (tok, value) = self.expect_int(what)?;
+        if value < 0 || value as u64 > max {
+            return Err(self.error_at(
+                &tok,
+                format!("expected {what} between 0 and {max}, found {value}"),
+            ));
+        }
+        Ok(value as u64)
+    }
+
+    /// A whole number (sign allowed) and its token.
+    pub fn expect_int(&mut self, what: &str) -> Result<(Tok, i64)> {
+        let tok = self.expect_token(&format!("a whole number for {what}"))?;
+        match parse_int(self.text(&tok)) {
+            Some(v) => Ok((tok, v)),
+            None => Err(self.error_at(
+                &tok,
+                format!(
+                    "expected a whole number for {what}, found {}",
+                    show(self.text(&tok))
+                ),
+            )),
+        }
+    }
+
+    /// True if the next token looks like a number (used for optional trailing numbers).
+    pub fn peek_is_number(&mut self) -> Result<bool> {
+        Ok(match self.peek()? {
+            Some(tok) => self
+                .text(&tok)
+                .first()
+                .is_some_and(|b| b.is_ascii_digit() || matches!(b, b'-' | b'+' | b'.')),
+            None => false,
+        })
+    }
+
+    /// Discards the rest of the current line, including its line break.
+    pub fn skip_line(&mut self) -> Result<()> {
+        debug_assert!(self.peeked.is_none(), "skip_line after peek");
+        while self.pos < self.end || self.refill(self.pos)? {
+            let b = self.buf[self.pos];
+            self.pos += 1;
+            if b == b'\n' {
+                self.line += 1;
+                self.line_start = self.consumed + self.pos as u64;
+                break;
+            }
+        }
+        Ok(())
+    }
+
+    /// Absolute byte offset of the read position (for binary data after a text header).
+    pub fn offset(&self) -> u64 {
+        self.consumed + self.pos as u64
+    }
+
+    /// Reads raw bytes (binary PLY after its header). Returns false if the data ends first.
+    pub fn read_exact(&mut self, out: &mut [u8]) -> Result<bool> {
+        debug_assert!(self.peeked.is_none(), "read_exact after peek");
+        let mut filled = 0;
+        while filled < out.len() {
+            if self.pos == self.end && !self.refill(self.pos)? {
+                return Ok(false);
+            }
+            let n = (self.end - self.pos).min(out.len() - filled);
+            out[filled..filled + n].copy_from_slice(&self.buf[self.pos..self.pos + n]);
+            self.pos += n;
+            filled += n;
+        }
+        Ok(true)
+    }
+}
+
+/// Parses a decimal float; `None` if the bytes are not one.
+pub fn parse_f32(text: &[u8]) -> Option<f32> {
+    std::str::from_utf8(text).ok()?.parse().ok()
+}
+
+/// Parses a decimal integer with an optional sign; `None` on junk or overflow.
+pub fn parse_int(text: &[u8]) -> Option<i64> {
+    let (neg, digits) = match text.first()? {
+        b'-' => (true, &text[1..]),
+        b'+' => (false, &text[1..]),
+        _ => (false, text),
+    };
+    if digits.is_empty() || digits.len() > 18 {
+        return None;
+    }
+    let mut v: i64 = 0;
+    for &b in digits {
+        if !b.is_ascii_digit() {
+            return None;
+        }
+        v = v * 10 + (b - b'0') as i64;
+    }
+    Some(if neg { -v } else { v })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lexer(text: &'static str) -> Lexer {
+        Lexer::new(Path::new("t.txt"), Box::new(text.as_bytes()))
+    }
+
+    fn words(mut lx: Lexer) -> Vec<(String, u32, u32)> {
+        let mut out = vec![];
+        while let Some(t) = lx.next_token().unwrap() {
+            out.push((String::from_utf8_lossy(lx.text(&t)).into_owned(), t.line, t.col));
+        }
+        out
+    }
+
+    #[test]
+    fn tokens_lines_and_columns() {
+        let got = words(lexer("ab  c\n# comment\n  d#x\r\ne"));
+        let want = [("ab", 1, 1), ("c", 1, 5), ("d", 3, 3), ("e", 4, 1)];
+        let want: Vec<_> = want.iter().map(|&(s, l, c)| (s.to_string(), l, c)).collect();
+        assert_eq!(got, want);
+    }
+
+    /// Tokens that straddle the buffer boundary come out whole, with the right positions.
+    #[test]
+    fn tokens_across_refills() {
+        let mut text = String::new();
+        for i in 0..40_000 {
+            text.push_str(&format!("{i} "));
+            if i % 7 == 0 {
+                text.push('\n');
+            }
+        }
+        let text: &'static str = Box::leak(text.into_boxed_str());
+        let got = words(lexer(text));
+        assert_eq!(got.len(), 40_000);
+        for (i, (w, _, _)) in got.iter().enumerate() {
+            assert_eq!(w, &i.to_string());
+        }
+        // A line break follows every multiple of 7 up to 39,998: 5,715 of them.
+        assert_eq!(got.last().unwrap().1, 39_999 / 7 + 2);
+    }
+
+    #[test]
+    fn numbers() {
+        assert_eq!(parse_int(b"-12"), Some(-12));
+        assert_eq!(parse_int(b"1x"), None);
+        assert_eq!(parse_int(b"99999999999999999999"), None);
+        let mut lx = lexer("1.5 nan 1e99 abc");
+        assert_eq!(lx.expect_f32("x").unwrap(), 1.5);
+        assert!(lx.expect_f32("x").unwrap_err().message.contains("finite"));
+        assert!(lx.expect_f32("x").unwrap_err().message.contains("finite"));
+        let e = lx.expect_f32("the radius").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t.txt:1:14: expected a number for the radius, found \"abc\""
+        );
+        let e = lx.expect_f32("the radius").unwrap_err();
+        assert!(e.message.contains("end of the file"), "{e}");
+    }
+
+    #[test]
+    fn long_garbage_is_an_error() {
+        let text: &'static str = Box::leak("x".repeat(5000).into_boxed_str());
+        assert!(lexer(text).next_token().is_err());
+    }
+}

@@ -1,0 +1,1122 @@
+//! Stanford PLY meshes: ascii and binary (either byte order), gzipped or not.
+//!
+//! The header is read with the text [`Lexer`]; the body streams through it too, token by token (ascii) or
+//! value by value (binary), so memory stays at the size of the mesh itself whatever counts a header claims.
+//! Only the `vertex` x, y, z and the `face` vertex indices are kept; every other element and property is
+//! read and dropped, so that the files of scanners (confidence, intensity, edges, materials) load as they
+//! are.
+
+use std::fmt;
+use std::path::Path;
+
+use glam::Vec3;
+
+use super::MeshData;
+use super::lex::{self, Lexer, Tok, show};
+use super::polygon::triangulate;
+use crate::error::{Error, Location, Result};
+
+/// The most elements reserved up front from a header's count: plenty for big meshes, harmless when a
+/// corrupt header claims billions.
+const MAX_RESERVE: u64 = 1 << 20;
+
+/// What the `format` line accepts, for error messages.
+const FORMATS: &str = "\"format ascii 1.0\", \"binary_little_endian 1.0\" or \"binary_big_endian 1.0\"";
+
+/// Loads a PLY mesh (ascii, binary little or big endian; gzipped or not), triangulating its polygons.
+///
+/// Errors say where: `path:line:col` in the header and in an ascii body, `path: byte N` in a binary body.
+pub fn load(path: &Path) -> Result<MeshData> {
+    let mut lx = Lexer::open(path)?;
+    let header = read_header(&mut lx)?;
+    match header.format {
+        Format::Ascii => {
+            let mut body = Ascii {
+                lx: &mut lx,
+                new_row: true,
+                // Data on the `end_header` line is an extra value, like data after a row.
+                row_line: header.end_line,
+                last_col: 0,
+                end_col: 0,
+            };
+            read_body(&mut body, &header)
+        }
+        Format::Binary { big_endian } => {
+            // The body starts right after the line break of `end_header`.
+            lx.skip_line()?;
+            let mut body = Binary {
+                lx: &mut lx,
+                big_endian,
+                last: 0,
+            };
+            read_body(&mut body, &header)
+        }
+    }
+}
+
+/// Scratch space for triangulating polygons, reused from face to face so that no face allocates (shared
+/// with the OBJ reader).
+#[derive(Default)]
+pub(super) struct Polygons {
+    points: Vec<Vec3>,
+    local: Vec<[u32; 3]>,
+}
+
+impl Polygons {
+    /// Appends the triangles of the polygon `indices` (at least 3, each in range of `positions`) to `out`.
+    pub(super) fn push(&mut self, positions: &[Vec3], indices: &[u32], out: &mut Vec<[u32; 3]>) {
+        if let &[a, b, c] = indices {
+            out.push([a, b, c]);
+            return;
+        }
+        self.points.clear();
+        self.points.extend(indices.iter().map(|&i| positions[i as usize]));
+        self.local.clear();
+        triangulate(&self.points, &mut self.local);
+        // `triangulate` numbers the polygon's own corners; map them back to the mesh's vertices.
+        out.extend(self.local.iter().map(|t| t.map(|k| indices[k as usize])));
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Format {
+    Ascii,
+    Binary { big_endian: bool },
+}
+
+/// A scalar type of the header.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Scalar {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Scalar {
+    fn parse(name: &[u8]) -> Option<Scalar> {
+        Some(match name {
+            b"char" | b"int8" => Scalar::I8,
+            b"uchar" | b"uint8" => Scalar::U8,
+            b"short" | b"int16" => Scalar::I16,
+            b"ushort" | b"uint16" => Scalar::U16,
+            b"int" | b"int32" => Scalar::I32,
+            b"uint" | b"uint32" => Scalar::U32,
+            b"float" | b"float32" => Scalar::F32,
+            b"double" | b"float64" => Scalar::F64,
+            _ => return None,
+        })
+    }
+
+    fn is_integer(self) -> bool {
+        !matches!(self, Scalar::F32 | Scalar::F64)
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    Scalar(Scalar),
+    List { count: Scalar, item: Scalar },
+}
+
+/// What the reader does with a property.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Role {
+    Skip,
+    /// A vertex coordinate: 0, 1, 2 for x, y, z.
+    Axis(usize),
+    /// The vertex indices of a face.
+    Indices,
+}
+
+#[derive(Debug)]
+struct Property {
+    name: String,
+    kind: Kind,
+    role: Role,
+    /// The `property` keyword, for errors (only its line and column are used).
+    at: Tok,
+}
+
+#[derive(Debug)]
+struct Element {
+    name: String,
+    count: u64,
+    props: Vec<Property>,
+    /// The `element` keyword, for errors.
+    at: Tok,
+}
+
+/// A checked header: it has a vertex element with x, y, z before a face element with vertex indices.
+#[derive(Debug)]
+struct Header {
+    format: Format,
+    elements: Vec<Element>,
+    vertex: usize,
+    face: usize,
+    end_line: u32,
+}
+
+fn read_header(lx: &mut Lexer) -> Result<Header> {
+    const MAGIC: &str = "not a PLY file: expected \"ply\" on the first line";
+    match lx.next_token()? {
+        Some(tok) if tok.line == 1 && lx.text(&tok) == b"ply" => {}
+        Some(tok) => return Err(lx.error_at(&tok, format!("{MAGIC}, found {}", show(lx.text(&tok))))),
+        None => return Err(Error::file(lx.path(), format!("{MAGIC}, found an empty file"))),
+    }
+    let mut format = None;
+    let mut elements: Vec<Element> = Vec::new();
+    loop {
+        let tok = lx.expect_token("\"end_header\"")?;
+        match lx.text(&tok) {
+            b"format" => {
+                if format.is_some() {
+                    return Err(lx.error_at(&tok, "expected one \"format\" line, found a second one"));
+                }
+                format = Some(read_format(lx)?);
+            }
+            b"comment" | b"obj_info" => lx.skip_line()?,
+            b"element" => {
+                let name = lx.expect_token("an element name")?;
+                let name = String::from_utf8_lossy(lx.text(&name)).into_owned();
+                let count = lx.expect_uint(&format!("the number of \"{name}\" elements"), u32::MAX.into())?;
+                elements.push(Element {
+                    name,
+                    count,
+                    props: Vec::new(),
+                    at: tok,
+                });
+            }
+            b"property" => {
+                let Some(element) = elements.last_mut() else {
+                    return Err(lx.error_at(
+                        &tok,
+                        "expected an \"element\" line before \"property\", found none",
+                    ));
+                };
+                element.props.push(read_property(lx, tok)?);
+            }
+            b"end_header" => {
+                let Some(format) = format else {
+                    return Err(lx.error_at(&tok, "expected a \"format\" line in the header, found none"));
+                };
+                return check_header(lx, format, elements, tok);
+            }
+            other => {
+                return Err(lx.error_at(
+                    &tok,
+                    format!(
+                        "expected \"format\", \"comment\", \"obj_info\", \"element\", \"property\" or \
+                         \"end_header\", found {}",
+                        show(other)
+                    ),
+                ));
+            }
+        }
+    }
+}
+
+/// The rest of a `format` line.
+fn read_format(lx: &mut Lexer) -> Result<Format> {
+    let tok = lx.expect_token(FORMATS)?;
+    let format = match lx.text(&tok) {
+        b"ascii" => Format::Ascii,
+        b"binary_little_endian" => Format::Binary { big_endian: false },
+        b"binary_big_endian" => Format::Binary { big_endian: true },
+        other => return Err(lx.error_at(&tok, format!("expected {FORMATS}, found {}", show(other)))),
+    };
+    let context = format!("after \"format {}\"", String::from_utf8_lossy(lx.text(&tok)));
+    lx.expect_word("1.0", &context)?;
+    Ok(format)
+}
+
+/// The rest of a `property` line; `at` is its keyword.
+fn read_property(lx: &mut Lexer, at: Tok) -> Result<Property> {
+    let first = lx.expect_token("a property type or \"list\"")?;
+    let kind = if lx.text(&first) == b"list" {
+        let tok = lx.expect_token("a list length type")?;
+        let count = scalar_type(lx, &tok, "a list length type")?;
+        if !count.is_integer() {
+            return Err(lx.error_at(
+                &tok,
+                format!(
+                    "expected an integer list length type, found {}",
+                    show(lx.text(&tok))
+                ),
+            ));
+        }
+        let tok = lx.expect_token("a list item type")?;
+        Kind::List {
+            count,
+            item: scalar_type(lx, &tok, "a list item type")?,
+        }
+    } else {
+        Kind::Scalar(scalar_type(lx, &first, "a property type or \"list\"")?)
+    };
+    let name = lx.expect_token("a property name")?;
+    Ok(Property {
+        name: String::from_utf8_lossy(lx.text(&name)).into_owned(),
+        kind,
+        role: Role::Skip,
+        at,
+    })
+}
+
+/// The type named by `tok`, which stands for `what`.
+fn scalar_type(lx: &Lexer, tok: &Tok, what: &str) -> Result<Scalar> {
+    Scalar::parse(lx.text(tok)).ok_or_else(|| {
+        lx.error_at(
+            tok,
+            format!(
+                "expected {what} (char, uchar, short, ushort, int, uint, float, double, int8, uint8, int16, \
+                 uint16, int32, uint32, float32 or float64), found {}",
+                show(lx.text(tok))
+            ),
+        )
+    })
+}
+
+/// Finds the vertex and face elements, checks them, and marks the properties the reader keeps.
+fn check_header(lx: &Lexer, format: Format, mut elements: Vec<Element>, end: Tok) -> Result<Header> {
+    let vertex = find_element(lx, &elements, "vertex", &end)?;
+    let vertices = &mut elements[vertex];
+    for (axis, name) in ["x", "y", "z"].into_iter().enumerate() {
+        let mut found = false;
+        for prop in vertices.props.iter_mut().filter(|p| p.name == name) {
+            if let Kind::List { .. } = prop.kind {
+                return Err(lx.error_at(
+                    &prop.at,
+                    format!("expected a number type for vertex property \"{name}\", found a list"),
+                ));
+            }
+            prop.role = Role::Axis(axis);
+            found = true;
+        }
+        if !found {
+            return Err(lx.error_at(
+                &vertices.at,
+                format!("expected a \"{name}\" property in the \"vertex\" element, found none"),
+            ));
+        }
+    }
+
+    let face = find_element(lx, &elements, "face", &end)?;
+    if face < vertex {
+        return Err(lx.error_at(
+            &elements[face].at,
+            "expected the \"vertex\" element before the \"face\" element, found it after",
+        ));
+    }
+    let faces = &mut elements[face];
+    let Some(indices) = faces
+        .props
+        .iter_mut()
+        .find(|p| p.name == "vertex_indices" || p.name == "vertex_index")
+    else {
+        return Err(lx.error_at(
+            &faces.at,
+            "expected a \"vertex_indices\" list property in the \"face\" element, found none",
+        ));
+    };
+    match indices.kind {
+        Kind::List { item, .. } if item.is_integer() => indices.role = Role::Indices,
+        Kind::List { .. } => {
+            return Err(lx.error_at(
+                &indices.at,
+                format!(
+                    "expected integer items in list \"{}\", found numbers",
+                    indices.name
+                ),
+            ));
+        }
+        Kind::Scalar(_) => {
+            return Err(lx.error_at(
+                &indices.at,
+                format!(
+                    "expected \"property list\" for \"{}\", found a single value",
+                    indices.name
+                ),
+            ));
+        }
+    }
+
+    Ok(Header {
+        format,
+        elements,
+        vertex,
+        face,
+        end_line: end.line,
+    })
+}
+
+/// The index of the one element called `name`.
+fn find_element(lx: &Lexer, elements: &[Element], name: &str, end: &Tok) -> Result<usize> {
+    let mut found = elements.iter().enumerate().filter(|(_, e)| e.name == name);
+    let Some((index, _)) = found.next() else {
+        return Err(lx.error_at(
+            end,
+            format!("expected an \"element {name}\" line in the header, found \"end_header\""),
+        ));
+    };
+    if let Some((_, second)) = found.next() {
+        return Err(lx.error_at(
+            &second.at,
+            format!("expected one \"{name}\" element, found a second one"),
+        ));
+    }
+    Ok(index)
+}
+
+/// The data after the header, ascii or binary, one value at a time. Each read says what the value is for,
+/// lazily formatted, so that errors can say what was expected where at no cost on the happy path.
+trait Body {
+    /// Starts the next element (a line of its own in ascii).
+    fn start_row(&mut self);
+    /// A number of type `ty`, converted to `f32` (non-finite values are returned for the caller to reject).
+    fn float(&mut self, ty: Scalar, what: fmt::Arguments) -> Result<f32>;
+    /// A whole number of the integer type `ty` (the header was checked for that).
+    fn int(&mut self, ty: Scalar, what: fmt::Arguments) -> Result<i64>;
+    /// A value that is not kept.
+    fn skip(&mut self, ty: Scalar, what: fmt::Arguments) -> Result<()>;
+    /// An error at the value read last.
+    fn error(&self, message: String) -> Error;
+    /// Checks that nothing follows the last element.
+    fn finish(&mut self) -> Result<()>;
+}
+
+/// Reads every element in the order of the header.
+fn read_body(body: &mut impl Body, header: &Header) -> Result<MeshData> {
+    let mut mesh = MeshData::default();
+    for (index, element) in header.elements.iter().enumerate() {
+        if index == header.vertex {
+            read_vertices(body, element, &mut mesh.positions)?;
+        } else if index == header.face {
+            read_faces(body, element, &mesh.positions, &mut mesh.triangles)?;
+        } else {
+            for row in 0..element.count {
+                body.start_row();
+                for prop in &element.props {
+                    skip_property(body, element, prop, row)?;
+                }
+            }
+        }
+    }
+    body.finish()?;
+    Ok(mesh)
+}
+
+fn read_vertices(body: &mut impl Body, element: &Element, positions: &mut Vec<Vec3>) -> Result<()> {
+    positions.reserve(element.count.min(MAX_RESERVE) as usize);
+    for row in 0..element.count {
+        body.start_row();
+        let mut p = Vec3::ZERO;
+        for prop in &element.props {
+            match (prop.role, prop.kind) {
+                (Role::Axis(axis), Kind::Scalar(ty)) => {
+                    let v = body.float(ty, format_args!("the {} coordinate of vertex {row}", prop.name))?;
+                    // NaN and infinities would poison the bounding boxes and every ray that meets them.
+                    if !v.is_finite() {
+                        return Err(body.error(format!(
+                            "expected a finite number for the {} coordinate of vertex {row}, found {v}",
+                            prop.name
+                        )));
+                    }
+                    p[axis] = v;
+                }
+                _ => skip_property(body, element, prop, row)?,
+            }
+        }
+        positions.push(p);
+    }
+    Ok(())
+}
+
+fn read_faces(
+    body: &mut impl Body,
+    element: &Element,
+    positions: &[Vec3],
+    triangles: &mut Vec<[u32; 3]>,
+) -> Result<()> {
+    triangles.reserve(element.count.min(MAX_RESERVE) as usize);
+    let vertex_count = positions.len() as i64;
+    let mut polygons = Polygons::default();
+    let mut indices: Vec<u32> = Vec::new();
+    for row in 0..element.count {
+        body.start_row();
+        for prop in &element.props {
+            match (prop.role, prop.kind) {
+                (Role::Indices, Kind::List { count, item }) => {
+                    let n = body.int(count, format_args!("the number of vertices of face {row}"))?;
+                    if n < 3 {
+                        return Err(body.error(format!(
+                            "expected 3 or more vertex indices in face {row}, found {n}"
+                        )));
+                    }
+                    indices.clear();
+                    for _ in 0..n {
+                        let index = body.int(item, format_args!("a vertex index of face {row}"))?;
+                        if !(0..vertex_count).contains(&index) {
+                            return Err(body.error(format!(
+                                "expected a vertex index below {vertex_count}, found {index}"
+                            )));
+                        }
+                        indices.push(index as u32);
+                    }
+                    polygons.push(positions, &indices, triangles);
+                }
+                _ => skip_property(body, element, prop, row)?,
+            }
+        }
+    }
+    Ok(())
+}
+
+fn skip_property(body: &mut impl Body, element: &Element, prop: &Property, row: u64) -> Result<()> {
+    match prop.kind {
+        Kind::Scalar(ty) => body.skip(ty, format_args!("\"{}\" of {} {row}", prop.name, element.name)),
+        Kind::List { count, item } => {
+            let n = body.int(
+                count,
+                format_args!("the length of list \"{}\" of {} {row}", prop.name, element.name),
+            )?;
+            if n < 0 {
+                return Err(body.error(format!(
+                    "expected a length of 0 or more for list \"{}\" of {} {row}, found {n}",
+                    prop.name, element.name
+                )));
+            }
+            for _ in 0..n {
+                body.skip(
+                    item,
+                    format_args!("an item of list \"{}\" of {} {row}", prop.name, element.name),
+                )?;
+            }
+            Ok(())
+        }
+    }
+}
+
+/// An ascii body: one element per line, values separated by spaces.
+struct Ascii<'a> {
+    lx: &'a mut Lexer,
+    /// The next token starts a new element, and so must be on a later line.
+    new_row: bool,
+    /// The line of the current element.
+    row_line: u32,
+    /// Column of the last token, and the column just after it.
+    last_col: u32,
+    end_col: u32,
+}
+
+impl Ascii<'_> {
+    /// The next token, which must be on the line of the current element (a new one for a new element):
+    /// that way a row with a missing or an extra value is reported on its own line, not where the counts
+    /// run out many lines later.
+    fn token(&mut self, what: fmt::Arguments) -> Result<Tok> {
+        let Some(tok) = self.lx.next_token()? else {
+            return Err(self
+                .lx
+                .error_here(format!("expected {what}, found the end of the file")));
+        };
+        if self.new_row {
+            if tok.line == self.row_line {
+                return Err(self.lx.error_at(
+                    &tok,
+                    format!("expected the end of the line, found {}", show(self.lx.text(&tok))),
+                ));
+            }
+            self.row_line = tok.line;
+            self.new_row = false;
+        } else if tok.line != self.row_line {
+            return Err(Error::at(
+                self.lx.path(),
+                self.row_line,
+                self.end_col,
+                format!("expected {what}, found the end of the line"),
+            ));
+        }
+        self.last_col = tok.col;
+        self.end_col = tok.col + self.lx.text(&tok).len() as u32;
+        Ok(tok)
+    }
+
+    fn found(&self, tok: &Tok, expected: fmt::Arguments) -> Error {
+        self.lx.error_at(
+            tok,
+            format!("expected {expected}, found {}", show(self.lx.text(tok))),
+        )
+    }
+}
+
+impl Body for Ascii<'_> {
+    fn start_row(&mut self) {
+        self.new_row = true;
+    }
+
+    fn float(&mut self, _ty: Scalar, what: fmt::Arguments) -> Result<f32> {
+        let tok = self.token(what)?;
+        lex::parse_f32(self.lx.text(&tok))
+            .ok_or_else(|| self.found(&tok, format_args!("a number for {what}")))
+    }
+
+    fn int(&mut self, _ty: Scalar, what: fmt::Arguments) -> Result<i64> {
+        let tok = self.token(what)?;
+        lex::parse_int(self.lx.text(&tok))
+            .ok_or_else(|| self.found(&tok, format_args!("a whole number for {what}")))
+    }
+
+    fn skip(&mut self, ty: Scalar, what: fmt::Arguments) -> Result<()> {
+        let tok = self.token(what)?;
+        let text = self.lx.text(&tok);
+        let ok = if ty.is_integer() {
+            lex::parse_int(text).is_some()
+        } else {
+            lex::parse_f32(text).is_some()
+        };
+        if ok {
+            Ok(())
+        } else {
+            Err(self.found(&tok, format_args!("a number for {what}")))
+        }
+    }
+
+    fn error(&self, message: String) -> Error {
+        Error::at(self.lx.path(), self.row_line, self.last_col, message)
+    }
+
+    fn finish(&mut self) -> Result<()> {
+        match self.lx.next_token()? {
+            Some(tok) => Err(self.found(&tok, format_args!("the end of the file after the last element"))),
+            None => Ok(()),
+        }
+    }
+}
+
+/// A binary body: values packed back to back in the header's order, little or big endian.
+struct Binary<'a> {
+    lx: &'a mut Lexer,
+    big_endian: bool,
+    /// Offset of the value read last.
+    last: u64,
+}
+
+impl Binary<'_> {
+    fn bytes<const N: usize>(&mut self, what: fmt::Arguments) -> Result<[u8; N]> {
+        self.last = self.lx.offset();
+        let mut bytes = [0; N];
+        if self.lx.read_exact(&mut bytes)? {
+            Ok(bytes)
+        } else {
+            Err(self.error(format!("expected {what}, found the end of the file")))
+        }
+    }
+
+    /// Any value as `f64`, which holds every integer type exactly.
+    fn value(&mut self, ty: Scalar, what: fmt::Arguments) -> Result<f64> {
+        macro_rules! read {
+            ($t:ty) => {{
+                let bytes = self.bytes(what)?;
+                (if self.big_endian {
+                    <$t>::from_be_bytes(bytes)
+                } else {
+                    <$t>::from_le_bytes(bytes)
+                }) as f64
+            }};
+        }
+        Ok(match ty {
+            Scalar::I8 => read!(i8),
+            Scalar::U8 => read!(u8),
+            Scalar::I16 => read!(i16),
+            Scalar::U16 => read!(u16),
+            Scalar::I32 => read!(i32),
+            Scalar::U32 => read!(u32),
+            Scalar::F32 => read!(f32),
+            Scalar::F64 => read!(f64),
+        })
+    }
+}
+
+impl Body for Binary<'_> {
+    fn start_row(&mut self) {}
+
+    fn float(&mut self, ty: Scalar, what: fmt::Arguments) -> Result<f32> {
+        Ok(self.value(ty, what)? as f32)
+    }
+
+    fn int(&mut self, ty: Scalar, what: fmt::Arguments) -> Result<i64> {
+        Ok(self.value(ty, what)? as i64)
+    }
+
+    fn skip(&mut self, ty: Scalar, what: fmt::Arguments) -> Result<()> {
+        self.value(ty, what).map(drop)
+    }
+
+    fn error(&self, message: String) -> Error {
+        Error {
+            path: Some(self.lx.path().to_path_buf()),
+            location: Location::Byte(self.last),
+            message,
+        }
+    }
+
+    fn finish(&mut self) -> Result<()> {
+        self.last = self.lx.offset();
+        if self.lx.read_exact(&mut [0])? {
+            Err(self.error("expected the end of the file after the last element, found more data".into()))
+        } else {
+            Ok(())
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::io::Write;
+
+    use flate2::Compression;
+    use flate2::write::GzEncoder;
+
+    use super::*;
+
+    /// A value of the test mesh, written as text or as bytes of its type.
+    #[derive(Clone, Copy)]
+    enum V {
+        U8(u8),
+        I32(i32),
+        F32(f32),
+        F64(f64),
+    }
+
+    const HEADER: &str = "\
+element vertex 5
+property float x
+property float y
+property uchar confidence
+property double z
+element edge 1
+property int vertex1
+property int vertex2
+property list uchar float weights
+element face 2
+property list uchar int vertex_indices
+property uchar material
+end_header
+";
+
+    /// A quad and a triangle, with a vertex property, an element and a face property that are skipped.
+    fn rows() -> Vec<Vec<V>> {
+        use V::*;
+        vec![
+            vec![F32(0.0), F32(0.0), U8(10), F64(0.0)],
+            vec![F32(1.0), F32(0.0), U8(20), F64(0.0)],
+            vec![F32(1.0), F32(1.0), U8(30), F64(0.5)],
+            vec![F32(0.0), F32(1.0), U8(40), F64(0.5)],
+            vec![F32(2.0), F32(0.5), U8(50), F64(0.25)],
+            vec![I32(0), I32(1), U8(2), F32(0.5), F32(0.25)],
+            vec![U8(4), I32(0), I32(1), I32(2), I32(3), U8(7)],
+            vec![U8(3), I32(1), I32(4), I32(2), U8(0)],
+        ]
+    }
+
+    fn header(format: &str, body: &str) -> String {
+        format!("ply\nformat {format} 1.0\ncomment a quad and a triangle\nobj_info test\n{body}")
+    }
+
+    fn ascii(rows: &[Vec<V>]) -> Vec<u8> {
+        let mut text = header("ascii", HEADER);
+        for row in rows {
+            let values: Vec<String> = row
+                .iter()
+                .map(|v| match *v {
+                    V::U8(v) => v.to_string(),
+                    V::I32(v) => v.to_string(),
+                    V::F32(v) => v.to_string(),
+                    V::F64(v) => v.to_string(),
+                })
+                .collect();
+            text.push_str(&values.join(" "));
+            text.push('\n');
+        }
+        text.into_bytes()
+    }
+
+    fn binary(rows: &[Vec<V>], big_endian: bool) -> Vec<u8> {
+        let format = if big_endian {
+            "binary_big_endian"
+        } else {
+            "binary_little_endian"
+        };
+        let mut bytes = header(format, HEADER).into_bytes();
+        for v in rows.iter().flatten() {
+            let (le, be) = match *v {
+                V::U8(v) => (vec![v], vec![v]),
+                V::I32(v) => (v.to_le_bytes().to_vec(), v.to_be_bytes().to_vec()),
+                V::F32(v) => (v.to_le_bytes().to_vec(), v.to_be_bytes().to_vec()),
+                V::F64(v) => (v.to_le_bytes().to_vec(), v.to_be_bytes().to_vec()),
+            };
+            bytes.extend(if big_endian { be } else { le });
+        }
+        bytes
+    }
+
+    fn gzip(bytes: &[u8]) -> Vec<u8> {
+        let mut encoder = GzEncoder::new(Vec::new(), Compression::default());
+        encoder.write_all(bytes).unwrap();
+        encoder.finish().unwrap()
+    }
+
+    fn load_bytes(bytes: &[u8]) -> Result<MeshData> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("mesh.ply");
+        std::fs::write(&path, bytes).unwrap();
+        load(&path)
+    }
+
+    fn load_text(text: &str) -> Result<MeshData> {
+        load_bytes(text.as_bytes())
+    }
+
+    fn expected() -> MeshData {
+        let positions = vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.5),
+            Vec3::new(0.0, 1.0, 0.5),
+            Vec3::new(2.0, 0.5, 0.25),
+        ];
+        // The quad's own corners are vertices 0..4, so its local indices are the mesh's.
+        let mut triangles = vec![];
+        triangulate(&positions[..4], &mut triangles);
+        triangles.push([1, 4, 2]);
+        MeshData { positions, triangles }
+    }
+
+    #[test]
+    fn ascii_and_binary_agree() {
+        let rows = rows();
+        let want = expected();
+        assert_eq!(want.triangles.len(), 3);
+        assert_eq!(load_bytes(&ascii(&rows)).unwrap(), want);
+        assert_eq!(load_bytes(&binary(&rows, false)).unwrap(), want);
+        assert_eq!(load_bytes(&binary(&rows, true)).unwrap(), want);
+    }
+
+    #[test]
+    fn gzipped() {
+        let rows = rows();
+        assert_eq!(load_bytes(&gzip(&ascii(&rows))).unwrap(), expected());
+        assert_eq!(load_bytes(&gzip(&binary(&rows, true))).unwrap(), expected());
+    }
+
+    /// Header and body can use CR LF line breaks; the binary body starts after the LF.
+    #[test]
+    fn crlf_header() {
+        let rows = rows();
+        let text = String::from_utf8(ascii(&rows)).unwrap().replace('\n', "\r\n");
+        assert_eq!(load_text(&text).unwrap(), expected());
+        let bytes = binary(&rows, false);
+        let body = bytes.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+        let header = String::from_utf8(bytes[..body].to_vec())
+            .unwrap()
+            .replace('\n', "\r\n");
+        let bytes = [header.as_bytes(), &bytes[body..]].concat();
+        assert_eq!(load_bytes(&bytes).unwrap(), expected());
+    }
+
+    #[test]
+    fn bad_magic() {
+        let e = load_text("plx\nformat ascii 1.0\n").unwrap_err();
+        assert_eq!(
+            e.message,
+            "not a PLY file: expected \"ply\" on the first line, found \"plx\""
+        );
+        assert_eq!(e.location, Location::LineCol(1, 1));
+        let e = load_text("").unwrap_err();
+        assert!(e.message.starts_with("not a PLY file"), "{e}");
+    }
+
+    #[test]
+    fn bad_format_line() {
+        let e = load_text("ply\nformat binary 1.0\nend_header\n").unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected \"format ascii 1.0\", \"binary_little_endian 1.0\" or \"binary_big_endian 1.0\", \
+             found \"binary\""
+        );
+        assert_eq!(e.location, Location::LineCol(2, 8));
+        let e = load_text("ply\nformat ascii 2.0\nend_header\n").unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected \"1.0\" after \"format ascii\", found \"2.0\""
+        );
+        assert_eq!(e.line(), Some(2));
+    }
+
+    #[test]
+    fn header_errors() {
+        let e = load_text("ply\nformat ascii 1.0\nproperty float x\nend_header\n").unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected an \"element\" line before \"property\", found none"
+        );
+        assert_eq!(e.line(), Some(3));
+        let e = load_text("ply\nformat ascii 1.0\nelement vertex 1\nproperty real x\n").unwrap_err();
+        assert!(
+            e.message
+                .starts_with("expected a property type or \"list\" (char"),
+            "{e}"
+        );
+        assert_eq!(e.location, Location::LineCol(4, 10));
+        let e = load_text("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n").unwrap_err();
+        assert_eq!(e.message, "expected \"end_header\", found the end of the file");
+        let e = load_text("ply\nformat ascii 1.0\nelements vertex 1\n").unwrap_err();
+        assert!(e.message.contains("found \"elements\""), "{e}");
+        assert_eq!(e.line(), Some(3));
+    }
+
+    #[test]
+    fn missing_elements_and_properties() {
+        let e = load_text(&header(
+            "ascii",
+            "element vertex 0\nproperty float x\nproperty float y\nend_header\n",
+        ))
+        .unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected a \"z\" property in the \"vertex\" element, found none"
+        );
+        assert_eq!(e.line(), Some(5));
+        let vertex = "element vertex 0\nproperty float x\nproperty float y\nproperty float z\n";
+        let e = load_text(&header("ascii", &format!("{vertex}end_header\n"))).unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected an \"element face\" line in the header, found \"end_header\""
+        );
+        assert_eq!(e.line(), Some(9));
+        let faces = "element face 0\nproperty list uchar float vertex_indices\n";
+        let e = load_text(&header("ascii", &format!("{vertex}{faces}end_header\n"))).unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected integer items in list \"vertex_indices\", found numbers"
+        );
+        assert_eq!(e.line(), Some(10));
+        let faces = "element face 0\nproperty list uchar int vertex_index\n";
+        let e = load_text(&header("ascii", &format!("{faces}{vertex}end_header\n"))).unwrap_err();
+        assert!(
+            e.message.starts_with("expected the \"vertex\" element before"),
+            "{e}"
+        );
+        let mesh = load_text(&header("ascii", &format!("{vertex}{faces}end_header\n"))).unwrap();
+        assert_eq!(mesh, MeshData::default());
+    }
+
+    /// The ascii rows of the test mesh as text, one string per line of the body.
+    fn ascii_lines() -> Vec<String> {
+        let text = String::from_utf8(ascii(&rows())).unwrap();
+        text.lines().map(str::to_string).collect()
+    }
+
+    fn with_line(lines: &[String], index: usize, line: &str) -> String {
+        let mut lines = lines.to_vec();
+        lines[index] = line.to_string();
+        lines.join("\n") + "\n"
+    }
+
+    /// Line numbers of the test mesh's ascii body (1-based).
+    const FIRST_FACE_LINE: u32 = 24;
+
+    #[test]
+    fn index_out_of_range() {
+        let lines = ascii_lines();
+        assert_eq!(lines[FIRST_FACE_LINE as usize - 1], "4 0 1 2 3 7");
+        let e = load_text(&with_line(&lines, FIRST_FACE_LINE as usize - 1, "4 0 1 9 3 7")).unwrap_err();
+        assert_eq!(e.message, "expected a vertex index below 5, found 9");
+        assert_eq!(e.location, Location::LineCol(FIRST_FACE_LINE, 7));
+        let e = load_text(&with_line(&lines, FIRST_FACE_LINE as usize, "3 1 -1 2 0")).unwrap_err();
+        assert_eq!(e.message, "expected a vertex index below 5, found -1");
+        assert_eq!(e.line(), Some(FIRST_FACE_LINE + 1));
+
+        let mut rows = rows();
+        rows[6][2] = V::I32(5);
+        let e = load_bytes(&binary(&rows, true)).unwrap_err();
+        assert_eq!(e.message, "expected a vertex index below 5, found 5");
+        assert!(matches!(e.location, Location::Byte(_)), "{e}");
+    }
+
+    #[test]
+    fn face_with_two_vertices() {
+        let lines = ascii_lines();
+        let e = load_text(&with_line(&lines, FIRST_FACE_LINE as usize, "2 1 4 0")).unwrap_err();
+        assert_eq!(e.message, "expected 3 or more vertex indices in face 1, found 2");
+        assert_eq!(e.location, Location::LineCol(FIRST_FACE_LINE + 1, 1));
+    }
+
+    #[test]
+    fn rows_with_missing_or_extra_values() {
+        let lines = ascii_lines();
+        // Vertex 1 lacks its z: reported at the end of its own line, not where the data runs out.
+        let e = load_text(&with_line(&lines, 18, "1 0 20")).unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected the z coordinate of vertex 1, found the end of the line"
+        );
+        assert_eq!(e.location, Location::LineCol(19, 7));
+        let e = load_text(&with_line(&lines, 18, "1 0 20 0 0")).unwrap_err();
+        assert_eq!(e.message, "expected the end of the line, found \"0\"");
+        assert_eq!(e.location, Location::LineCol(19, 10));
+        let e = load_text(&with_line(&lines, 18, "1 zero 20 0")).unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected a number for the y coordinate of vertex 1, found \"zero\""
+        );
+        assert_eq!(e.location, Location::LineCol(19, 3));
+        let e = load_text(&with_line(&lines, 22, "0 1 2 0.5 x")).unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected a number for an item of list \"weights\" of edge 0, found \"x\""
+        );
+        let e = load_text(&(lines.join("\n") + "\n0\n")).unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected the end of the file after the last element, found \"0\""
+        );
+        assert_eq!(e.line(), Some(26));
+    }
+
+    #[test]
+    fn truncated_ascii() {
+        let lines = ascii_lines();
+        let text = lines[..lines.len() - 1].join("\n");
+        let e = load_text(&text).unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected the number of vertices of face 1, found the end of the file"
+        );
+        assert_eq!(e.line(), Some(FIRST_FACE_LINE));
+    }
+
+    #[test]
+    fn truncated_binary() {
+        let bytes = binary(&rows(), false);
+        // Cut the last value (the material of face 1, one byte) and half of the index before it.
+        let e = load_bytes(&bytes[..bytes.len() - 3]).unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected a vertex index of face 1, found the end of the file"
+        );
+        assert_eq!(e.location, Location::Byte(bytes.len() as u64 - 5));
+        // One byte too many is an error too: the counts must describe the data.
+        let e = load_bytes(&[&bytes[..], &[0]].concat()).unwrap_err();
+        assert_eq!(e.location, Location::Byte(bytes.len() as u64));
+    }
+
+    #[test]
+    fn nan_coordinate() {
+        let lines = ascii_lines();
+        let e = load_text(&with_line(&lines, 19, "1 nan 30 0.5")).unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected a finite number for the y coordinate of vertex 2, found NaN"
+        );
+        assert_eq!(e.location, Location::LineCol(20, 3));
+        let mut rows = rows();
+        rows[3][3] = V::F64(f64::INFINITY);
+        let e = load_bytes(&binary(&rows, false)).unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected a finite number for the z coordinate of vertex 3, found inf"
+        );
+        assert!(matches!(e.location, Location::Byte(_)), "{e}");
+    }
+
+    /// A count the data does not hold is an end-of-file error, without reserving memory for it.
+    #[test]
+    fn huge_element_count() {
+        let text = header(
+            "ascii",
+            "element vertex 4000000000\nproperty float x\nproperty float y\nproperty float z\n\
+             element face 4000000000\nproperty list uchar int vertex_indices\nend_header\n\
+             0 0 0\n1 0 0\n0 1 0\n",
+        );
+        let e = load_text(&text).unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected the x coordinate of vertex 3, found the end of the file"
+        );
+        let e = load_text(&text.replace("4000000000", "5000000000")).unwrap_err();
+        assert!(e.message.contains("between 0 and 4294967295"), "{e}");
+    }
+
+    #[test]
+    fn corrupt_gzip() {
+        let mut text = header(
+            "ascii",
+            "element vertex 3000\nproperty float x\nproperty float y\nproperty float z\n\
+             element face 1000\nproperty list uchar int vertex_indices\nend_header\n",
+        );
+        for i in 0..3000 {
+            text.push_str(&format!("{} {} {}\n", i as f32 * 0.5, i % 7, i % 13));
+        }
+        for i in 0..1000 {
+            text.push_str(&format!("3 {} {} {}\n", 3 * i, 3 * i + 1, 3 * i + 2));
+        }
+        let mut bytes = gzip(text.as_bytes());
+        assert_eq!(load_bytes(&bytes).unwrap().triangles.len(), 1000);
+        let middle = bytes.len() / 2;
+        for b in &mut bytes[middle..middle + 8] {
+            *b ^= 0x5a;
+        }
+        assert!(load_bytes(&bytes).is_err());
+    }
+
+    fn dragon(name: &str) -> Option<std::path::PathBuf> {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../shared/models")
+            .join(name);
+        if path.exists() {
+            Some(path)
+        } else {
+            eprintln!("skipped: {} is absent", path.display());
+            None
+        }
+    }
+
+    fn check_indices(mesh: &MeshData) {
+        let n = mesh.positions.len() as u32;
+        assert!(mesh.triangles.iter().flatten().all(|&i| i < n));
+    }
+
+    #[test]
+    fn stanford_dragon_res2() {
+        let Some(path) = dragon("dragon_vrip_res2.ply.gz") else {
+            return;
+        };
+        let mesh = load(&path).unwrap();
+        assert_eq!(mesh.positions.len(), 100_250);
+        assert_eq!(mesh.triangles.len(), 202_520);
+        check_indices(&mesh);
+    }
+
+    /// The full dragon, timed: `cargo test --release --lib ply -- --ignored --nocapture`.
+    #[test]
+    #[ignore = "slow in debug builds; run in release to time the loader"]
+    fn stanford_dragon_full() {
+        let Some(path) = dragon("dragon_vrip.ply.gz") else {
+            return;
+        };
+        let start = std::time::Instant::now();
+        let mesh = load(&path).unwrap();
+        eprintln!(
+            "loaded {} in {:.3} s",
+            path.display(),
+            start.elapsed().as_secs_f64()
+        );
+        assert_eq!(mesh.positions.len(), 437_645);
+        assert_eq!(mesh.triangles.len(), 871_414);
+        check_indices(&mesh);
+    }
+}

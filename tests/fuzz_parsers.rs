@@ -1,0 +1,180 @@
+//! Property tests of the parsers on mangled input: whatever the bytes, the p3f/NFF and PLY parsers return
+//! a scene or an error that names a place in the file; they never panic, hang or allocate from a count
+//! the data does not hold. Inputs are real files with bytes, tokens and lines mutated.
+
+mod common;
+
+use std::io::Write;
+use std::path::Path;
+
+use proptest::prelude::*;
+use whitted::error::Location;
+use whitted::scene::p3f;
+
+const SCENE: &str = include_str!("../scenes/spd/teapot_1.nff");
+const COURSE: &str = include_str!("../scenes/balls_box.p3f");
+const EXTRA: &str = "lq 0 5 0 1 0 0 0 0 1 1 1 1 3\nc 0 0 0 1 0 1 0 0.5\nbox 0 0 0 1 1 1\npl 0 0 0 1 0 0 0 0 1\n\
+mesh 3 1\n0 0 0\n1 0 0\n0 1 0\n1 2 -1\n";
+
+/// Cases per property: `FUZZ_CASES` for a long run (`FUZZ_CASES=200000 cargo test --release --test
+/// fuzz_parsers`), else a CI-sized default.
+fn cases(default: u32) -> u32 {
+    std::env::var("FUZZ_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+/// A mutation of a text: replace, insert or delete bytes, or whole tokens, at a position.
+#[derive(Clone, Debug)]
+enum Edit {
+    Byte(usize, u8),
+    Insert(usize, String),
+    Delete(usize, usize),
+    Truncate(usize),
+}
+
+fn edit() -> impl Strategy<Value = Edit> {
+    let token = prop_oneof![
+        Just("-1".to_string()),
+        Just("0".to_string()),
+        Just("nan".to_string()),
+        Just("1e40".to_string()),
+        Just("999999999999".to_string()),
+        Just("p".to_string()),
+        Just("mesh".to_string()),
+        Just("f".to_string()),
+        Just("v".to_string()),
+        Just("\n".to_string()),
+        Just("#".to_string()),
+        "[ -~]{0,8}",
+    ];
+    prop_oneof![
+        (any::<usize>(), any::<u8>()).prop_map(|(i, b)| Edit::Byte(i, b)),
+        (any::<usize>(), token).prop_map(|(i, t)| Edit::Insert(i, format!(" {t} "))),
+        (any::<usize>(), 1usize..40).prop_map(|(i, n)| Edit::Delete(i, n)),
+        any::<usize>().prop_map(Edit::Truncate),
+    ]
+}
+
+fn apply(mut bytes: Vec<u8>, edits: &[Edit]) -> Vec<u8> {
+    for e in edits {
+        let n = bytes.len().max(1);
+        match e {
+            Edit::Byte(i, b) if !bytes.is_empty() => bytes[i % n] = *b,
+            Edit::Byte(..) => {}
+            Edit::Insert(i, t) => {
+                let at = i % (bytes.len() + 1);
+                bytes.splice(at..at, t.bytes());
+            }
+            Edit::Delete(i, len) => {
+                let at = i % n;
+                let end = (at + len).min(bytes.len());
+                bytes.drain(at.min(end)..end);
+            }
+            Edit::Truncate(i) => bytes.truncate(i % n),
+        }
+    }
+    bytes
+}
+
+fn check_scene(bytes: Vec<u8>) {
+    match p3f::parse(Path::new("fuzz.p3f"), Box::new(std::io::Cursor::new(bytes))) {
+        Ok(scene) => assert!(scene.camera.validate().is_ok()),
+        Err(e) => {
+            assert!(!e.message.is_empty());
+            assert_eq!(e.path.as_deref(), Some(Path::new("fuzz.p3f")));
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(cases(2000)))]
+
+    #[test]
+    fn nff_parser_survives_mutations(edits in prop::collection::vec(edit(), 1..6)) {
+        check_scene(apply(SCENE.as_bytes().to_vec(), &edits));
+    }
+
+    #[test]
+    fn p3f_parser_survives_mutations(edits in prop::collection::vec(edit(), 1..6)) {
+        let text = format!("{COURSE}{EXTRA}");
+        check_scene(apply(text.into_bytes(), &edits));
+    }
+
+    #[test]
+    fn parser_survives_random_bytes(bytes in prop::collection::vec(any::<u8>(), 0..512)) {
+        check_scene(bytes);
+    }
+}
+
+fn ply_ascii() -> Vec<u8> {
+    b"ply\nformat ascii 1.0\ncomment x\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n\
+property uchar red\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n\
+0 0 0 1\n1 0 0 2\n1 1 0 3\n0 1 0 4\n0 0 1 5\n4 0 1 2 3\n3 0 1 4\n"
+        .to_vec()
+}
+
+fn ply_binary() -> Vec<u8> {
+    let mut out =
+        b"ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+property float z\nelement face 2\nproperty list uchar uint vertex_indices\nend_header\n"
+            .to_vec();
+    for v in [[0f32, 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]] {
+        for c in v {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for f in [[0u32, 1, 2], [0, 2, 3]] {
+        out.push(3);
+        for i in f {
+            out.extend_from_slice(&i.to_le_bytes());
+        }
+    }
+    out
+}
+
+fn check_ply(bytes: &[u8], gzip: bool) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(if gzip { "m.ply.gz" } else { "m.ply" });
+    let mut file = std::fs::File::create(&path).unwrap();
+    if gzip {
+        let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        gz.write_all(bytes).unwrap();
+        file.write_all(&gz.finish().unwrap()).unwrap();
+    } else {
+        file.write_all(bytes).unwrap();
+    }
+    drop(file);
+    match whitted::scene::load_mesh(&path) {
+        Ok(mesh) => {
+            for t in &mesh.triangles {
+                assert!(t.iter().all(|&i| (i as usize) < mesh.positions.len()));
+            }
+            assert!(mesh.positions.iter().all(|p| p.is_finite()));
+        }
+        Err(e) => {
+            assert!(!e.message.is_empty());
+            assert!(e.path.is_some());
+            // Errors inside the data say where.
+            assert!(matches!(
+                e.location,
+                Location::LineCol(..) | Location::Byte(_) | Location::File
+            ));
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(cases(500)))]
+
+    #[test]
+    fn ply_ascii_survives_mutations(edits in prop::collection::vec(edit(), 1..5), gzip in any::<bool>()) {
+        check_ply(&apply(ply_ascii(), &edits), gzip);
+    }
+
+    #[test]
+    fn ply_binary_survives_mutations(edits in prop::collection::vec(edit(), 1..5), gzip in any::<bool>()) {
+        check_ply(&apply(ply_binary(), &edits), gzip);
+    }
+}
