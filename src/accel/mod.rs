@@ -3,6 +3,9 @@
 //! what lets every structure be checked against brute force with one loop.
 
 pub mod brute;
+pub mod bvh2;
+pub mod bvh4;
+pub mod grid;
 pub mod policy;
 pub mod prims;
 
@@ -12,6 +15,9 @@ pub use prims::{Hit, PrimKind, Prims, Surface};
 
 use crate::geometry::ray::Ray;
 use brute::Brute;
+use bvh2::{Builder, Bvh2};
+use bvh4::Bvh4;
+use grid::Grid;
 use policy::{AnyHit, Closest};
 
 /// Which structure to build.
@@ -19,6 +25,30 @@ use policy::{AnyHit, Closest};
 pub enum AccelKind {
     /// Test every primitive.
     None,
+    /// Uniform grid walked by 3D-DDA.
+    Grid,
+    /// Binary BVH.
+    Bvh2,
+    /// 4-wide BVH with SIMD node tests (the default).
+    Bvh4,
+}
+
+/// How the BVHs are built.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BuildOptions {
+    /// The BVH2's split rule (the BVH4 always collapses a binned-SAH BVH2).
+    pub builder: Builder,
+    /// SAH bins per axis.
+    pub bins: usize,
+}
+
+impl Default for BuildOptions {
+    fn default() -> Self {
+        BuildOptions {
+            builder: Builder::Sah { bins: 12 },
+            bins: 12,
+        }
+    }
 }
 
 impl FromStr for AccelKind {
@@ -27,7 +57,12 @@ impl FromStr for AccelKind {
     fn from_str(s: &str) -> Result<Self, String> {
         match s {
             "none" | "brute" => Ok(AccelKind::None),
-            _ => Err(format!("unknown accelerator \"{s}\": expected none")),
+            "grid" => Ok(AccelKind::Grid),
+            "bvh2" => Ok(AccelKind::Bvh2),
+            "bvh4" => Ok(AccelKind::Bvh4),
+            _ => Err(format!(
+                "unknown accelerator \"{s}\": expected none, grid, bvh2 or bvh4"
+            )),
         }
     }
 }
@@ -37,13 +72,42 @@ impl FromStr for AccelKind {
 pub enum Accel<'a> {
     /// Brute force.
     Brute(Brute<'a>),
+    /// Uniform grid.
+    Grid(Grid<'a>),
+    /// Binary BVH.
+    Bvh2(Bvh2<'a>),
+    /// 4-wide BVH.
+    Bvh4(Bvh4<'a>),
 }
 
 impl<'a> Accel<'a> {
     /// Builds the chosen structure.
     pub fn build(prims: Prims<'a>, kind: AccelKind) -> Self {
+        Self::build_with(prims, kind, BuildOptions::default())
+    }
+
+    /// Builds the chosen structure with explicit build options. A scene too large for the BVH4's leaf
+    /// references gets a BVH2.
+    pub fn build_with(prims: Prims<'a>, kind: AccelKind, options: BuildOptions) -> Self {
         match kind {
             AccelKind::None => Accel::Brute(Brute::new(prims)),
+            AccelKind::Grid => Accel::Grid(Grid::build(prims)),
+            AccelKind::Bvh2 => Accel::Bvh2(Bvh2::new(prims, options.builder)),
+            AccelKind::Bvh4 => match Bvh4::new(prims, options.bins) {
+                Some(b) => Accel::Bvh4(b),
+                None => Accel::Bvh2(Bvh2::new(prims, Builder::Sah { bins: options.bins })),
+            },
+        }
+    }
+
+    /// A one-line description of the built structure: node count, depth, leaf sizes and SAH cost for the
+    /// BVHs, resolution and references for the grid.
+    pub fn describe(&self) -> String {
+        match self {
+            Accel::Brute(_) => "brute force: every primitive for every ray".to_string(),
+            Accel::Grid(g) => g.stats().to_string(),
+            Accel::Bvh2(b) => format!("bvh2: {}", b.stats()),
+            Accel::Bvh4(b) => format!("bvh4: {}", b.stats()),
         }
     }
 
@@ -52,6 +116,9 @@ impl<'a> Accel<'a> {
     pub fn intersect(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
         match self {
             Accel::Brute(b) => b.traverse::<Closest>(ray, t_min, hit),
+            Accel::Grid(g) => g.traverse::<Closest>(ray, t_min, hit),
+            Accel::Bvh2(b) => b.traverse::<Closest>(ray, t_min, hit),
+            Accel::Bvh4(b) => b.traverse::<Closest>(ray, t_min, hit),
         }
     }
 
@@ -61,6 +128,9 @@ impl<'a> Accel<'a> {
         let mut hit = Hit::miss(t_max);
         match self {
             Accel::Brute(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
+            Accel::Grid(g) => g.traverse::<AnyHit>(ray, t_min, &mut hit),
+            Accel::Bvh2(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
+            Accel::Bvh4(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
         }
     }
 }

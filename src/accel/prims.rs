@@ -58,17 +58,22 @@ pub enum PrimKind {
     Plane(usize),
 }
 
-/// The surface at a hit, computed once for the closest hit.
+/// The hit record: the surface at the closest hit, computed once after traversal.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Surface {
+    /// Ray parameter of the hit.
+    pub t: f32,
     /// The hit point.
     pub point: Vec3,
-    /// Unit geometric normal on the outward (counter-clockwise front) side.
+    /// Unit geometric normal, turned toward the incoming ray (surfaces are two-sided).
     pub geometric: Vec3,
-    /// Unit shading normal on the same side as `geometric` (interpolated for smooth triangles).
+    /// Unit shading normal (interpolated for smooth triangles), turned with the geometric normal.
     pub shading: Vec3,
     /// The material.
     pub material: MaterialId,
+    /// True if the ray hit the back of the surface (the outward side of a sphere, box or cone, the
+    /// counter-clockwise front of a triangle): for a closed object, the ray travelled inside it.
+    pub inside: bool,
 }
 
 /// A view of a scene's primitives by id.
@@ -262,11 +267,15 @@ impl<'a> Prims<'a> {
                 (n, n, s.planes.material[i])
             }
         };
+        let inside = ray.dir.dot(geometric) > 0.0;
+        let sign = if inside { -1.0 } else { 1.0 };
         Surface {
+            t: hit.t,
             point,
-            geometric,
-            shading,
+            geometric: sign * geometric,
+            shading: sign * shading,
             material,
+            inside,
         }
     }
 }

@@ -4,7 +4,10 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::Args;
+use whitted::accel::{Accel, AccelKind, Prims};
 use whitted::scene::{self, Scene};
+
+use super::{BuildKind, build_options};
 
 /// Arguments of `whitted info`.
 #[derive(Args)]
@@ -14,6 +17,15 @@ pub struct InfoArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
+    /// Also build this accelerator (none, grid, bvh2, bvh4) and report its build time and shape.
+    #[arg(long)]
+    accel: Option<AccelKind>,
+    /// The BVH2 builder when `--accel bvh2`: sah or midpoint.
+    #[arg(long, default_value = "sah")]
+    build: BuildKind,
+    /// SAH bins per axis (2 to 64).
+    #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(2..=64))]
+    bins: u32,
 }
 
 /// Loads the scene and prints its summary.
@@ -24,10 +36,25 @@ pub fn run(args: &InfoArgs) -> whitted::Result<()> {
     for w in &scene.warnings {
         eprintln!("whitted: warning: {w}");
     }
+    let built = args.accel.map(|kind| {
+        let start = Instant::now();
+        let options = build_options(args.build, args.bins as usize);
+        let accel = Accel::build_with(Prims::new(&scene), kind, options);
+        (start.elapsed().as_secs_f64(), accel.describe())
+    });
     if args.json {
-        println!("{}", json(&scene, load_s));
+        let mut out = json(&scene, load_s);
+        if let Some((build_s, _)) = &built {
+            out.pop();
+            out += &format!(", \"build_s\": {build_s:.6}}}");
+        }
+        println!("{out}");
     } else {
         print!("{}", text(&args.scene, &scene, load_s));
+        if let Some((build_s, description)) = built {
+            println!("accelerator   {description}");
+            println!("build time    {build_s:.3} s");
+        }
     }
     Ok(())
 }

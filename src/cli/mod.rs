@@ -24,6 +24,24 @@ enum Command {
     Render(render::RenderArgs),
 }
 
+/// The BVH2 builder, as a command-line value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum BuildKind {
+    /// Binned surface area heuristic.
+    Sah,
+    /// Centroid midpoint of the longest axis.
+    Midpoint,
+}
+
+/// The library's build options from the command line's.
+pub fn build_options(build: BuildKind, bins: usize) -> whitted::accel::BuildOptions {
+    let builder = match build {
+        BuildKind::Sah => whitted::accel::bvh2::Builder::Sah { bins },
+        BuildKind::Midpoint => whitted::accel::bvh2::Builder::Midpoint,
+    };
+    whitted::accel::BuildOptions { builder, bins }
+}
+
 /// Runs the command line and turns errors into a message and an exit status.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();

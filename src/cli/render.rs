@@ -10,6 +10,8 @@ use whitted::accel::{Accel, AccelKind, Prims};
 use whitted::render::{Options, Renderer, film::Film, tiles};
 use whitted::scene::{self, Scene, check_resolution};
 
+use super::{BuildKind, build_options};
+
 /// The scene `render` draws when given none, compiled into the binary so the first command works anywhere.
 const DEFAULT_SCENE: &str = include_str!("../../scenes/default.p3f");
 
@@ -33,9 +35,15 @@ pub struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
-    /// Acceleration structure: none.
-    #[arg(long, default_value = "none")]
+    /// Acceleration structure: none, grid, bvh2 or bvh4.
+    #[arg(long, default_value = "bvh4")]
     accel: AccelKind,
+    /// The BVH2 builder when `--accel bvh2`: sah or midpoint.
+    #[arg(long, default_value = "sah")]
+    build: BuildKind,
+    /// SAH bins per axis (2 to 64).
+    #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(2..=64))]
+    bins: u32,
     /// Encode the output with the sRGB curve (default: linear values, the course's convention).
     #[arg(long)]
     srgb: bool,
@@ -88,7 +96,11 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
     let loaded = start.elapsed();
 
     let build_start = Instant::now();
-    let accel = Accel::build(Prims::new(&scene), args.accel);
+    let accel = Accel::build_with(
+        Prims::new(&scene),
+        args.accel,
+        build_options(args.build, args.bins as usize),
+    );
     let built = build_start.elapsed();
 
     let options = Options {

@@ -27,14 +27,7 @@ impl Renderer<'_> {
         }
         let surface = self.prims.surface(ray, &hit);
         let m = &self.scene.materials[surface.material as usize];
-        // The ray hit the back of the surface: it travels inside the object (for closed objects).
-        let inside = ray.dir.dot(surface.geometric) > 0.0;
-        let (ng, ns) = if inside {
-            (-surface.geometric, -surface.shading)
-        } else {
-            (surface.geometric, surface.shading)
-        };
-        let p = surface.point;
+        let (p, ng, ns, inside) = (surface.point, surface.geometric, surface.shading, surface.inside);
         let mut color = self.local(p, ng, ns, -ray.dir, m);
 
         if depth < self.options.max_depth {
@@ -62,7 +55,7 @@ impl Renderer<'_> {
         }
         if inside && m.transmission > 0.0 {
             // The ray crossed the object's interior from its entry point to here.
-            color *= beer(m.diffuse, hit.t);
+            color *= beer(m.diffuse, surface.t);
         }
         color
     }

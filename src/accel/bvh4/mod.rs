@@ -1,0 +1,127 @@
+//! The 4-wide BVH: the SAH BVH2 collapsed to four children per node (Dammertz et al. 2008, "Shallow
+//! Bounding Volume Hierarchies for Fast SIMD Ray Tracing of Incoherent Rays"; Wald et al. 2008) and
+//! flattened depth-first into one array. Each node keeps its four children's boxes as structure of arrays,
+//! so one 4-lane slab test answers all four at once.
+
+mod collapse;
+mod traverse;
+
+use glam::Vec3;
+
+use super::bvh2::{self, Builder, Bvh2, Stats};
+use super::prims::Prims;
+use crate::geometry::aabb::Aabb;
+
+/// A child reference: an interior node's index, a leaf (`LEAF | first << COUNT_BITS | count`), or
+/// [`EMPTY`].
+pub type ChildRef = u32;
+/// Marks a leaf reference.
+pub const LEAF: u32 = 1 << 31;
+/// Bits of a leaf reference that hold its primitive count.
+pub const COUNT_BITS: u32 = 4;
+/// An unused child slot (its box is inverted, so no ray ever enters it).
+pub const EMPTY: ChildRef = u32::MAX;
+/// The most primitives a BVH4 can index: what fits a leaf reference beside its count.
+pub const MAX_PRIMS: u32 = 1 << (31 - COUNT_BITS);
+
+/// A node: four children's boxes as component arrays, then their references. 112 bytes, aligned to
+/// a 64-byte cache line so a node spans exactly two lines.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub struct Node4 {
+    /// Children's smallest x, y, z.
+    pub min: [[f32; 4]; 3],
+    /// Children's largest x, y, z.
+    pub max: [[f32; 4]; 3],
+    /// Children.
+    pub child: [ChildRef; 4],
+}
+
+impl Node4 {
+    /// A node with four empty slots (inverted boxes).
+    pub const EMPTY: Node4 = Node4 {
+        min: [[f32::INFINITY; 4]; 3],
+        max: [[f32::NEG_INFINITY; 4]; 3],
+        child: [EMPTY; 4],
+    };
+}
+
+/// Decodes a leaf reference into its range of the id array.
+#[inline(always)]
+pub fn leaf_range(r: ChildRef) -> std::ops::Range<usize> {
+    let first = ((r & !LEAF) >> COUNT_BITS) as usize;
+    first..first + (r & ((1 << COUNT_BITS) - 1)) as usize
+}
+
+/// A 4-wide BVH over a scene's bounded primitives (planes are tested beside it).
+#[derive(Clone, Debug)]
+pub struct Bvh4<'a> {
+    prims: Prims<'a>,
+    /// Nodes in depth-first order, the root first.
+    pub nodes: Vec<Node4>,
+    /// Primitive ids in leaf order (each leaf's primitives are contiguous).
+    pub ids: Vec<u32>,
+    /// The root reference (a node, a lone leaf, or [`EMPTY`] for a scene without bounded primitives).
+    pub root: ChildRef,
+    /// The box around everything.
+    pub bounds: Aabb,
+}
+
+impl<'a> Bvh4<'a> {
+    /// Builds a binned-SAH BVH2 and collapses it. Scenes beyond [`MAX_PRIMS`] primitives have no BVH4.
+    pub fn new(prims: Prims<'a>, bins: usize) -> Option<Self> {
+        if prims.bounded() > MAX_PRIMS {
+            return None;
+        }
+        Some(Self::from_bvh2(Bvh2::new(prims, Builder::Sah { bins })))
+    }
+
+    /// Collapses a BVH2 (whose leaves hold at most 15 primitives).
+    pub fn from_bvh2(bvh2: Bvh2<'a>) -> Self {
+        let (nodes, root) = collapse::collapse(&bvh2.nodes);
+        Bvh4 {
+            prims: *bvh2.prims(),
+            nodes,
+            ids: bvh2.ids,
+            root,
+            bounds: bvh2.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds),
+        }
+    }
+
+    /// The box of child slot `k` of node `n`.
+    pub fn child_bounds(n: &Node4, k: usize) -> Aabb {
+        Aabb::new(
+            Vec3::new(n.min[0][k], n.min[1][k], n.min[2][k]),
+            Vec3::new(n.max[0][k], n.max[1][k], n.max[2][k]),
+        )
+    }
+
+    /// Node count (leaves included), depth, leaf sizes and SAH cost, weighted as for the BVH2: each node
+    /// visited costs one traversal step, each leaf its primitives, in proportion to their area.
+    pub fn stats(&self) -> Stats {
+        let mut s = Stats::default();
+        let root_area = self.bounds.area().max(f32::MIN_POSITIVE) as f64;
+        let mut stack = vec![(self.root, 1.0f64, 1usize)];
+        while let Some((r, rel, depth)) = stack.pop() {
+            if r == EMPTY {
+                continue;
+            }
+            s.nodes += 1;
+            s.depth = s.depth.max(depth);
+            if r & LEAF != 0 {
+                let count = leaf_range(r).len();
+                s.leaves += 1;
+                s.add_leaf(count);
+                s.sah += bvh2::INTERSECTION_COST as f64 * count as f64 * rel;
+                continue;
+            }
+            s.sah += bvh2::TRAVERSAL_COST as f64 * rel;
+            let n = &self.nodes[r as usize];
+            for k in 0..4 {
+                let area = Self::child_bounds(n, k).area() as f64;
+                stack.push((n.child[k], area / root_area, depth + 1));
+            }
+        }
+        s
+    }
+}

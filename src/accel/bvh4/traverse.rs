@@ -1,0 +1,149 @@
+//! The single-ray BVH4 kernel, written once for closest and any hit.
+//!
+//! Per node: one 4-lane slab test of the four children. The near and far planes of each axis are chosen
+//! by the sign of the ray's direction (a blend, not a min/max), which keeps the empty slots' inverted
+//! boxes empty. Closest-hit visits the hit children nearest first and skips stack entries whose entry
+//! distance lies beyond the closest hit so far; any-hit visits them in any order and returns at the first
+//! hit.
+
+use wide::f32x4;
+
+use super::{Bvh4, ChildRef, EMPTY, LEAF, leaf_range};
+use crate::accel::policy::HitPolicy;
+use crate::accel::prims::Hit;
+use crate::geometry::ray::{CULL_MARGIN, Ray, SLAB_ROBUST, safe_inverse};
+
+/// Traversal stack depth: three pushes per level of a tree the builders keep under 100 levels deep.
+const STACK: usize = 256;
+
+/// A ray prepared for 4-wide slab tests: origin and inverse direction splatted, and per axis a mask of
+/// "direction negative" that swaps which of min/max is the near plane.
+struct Prepared {
+    origin: [f32x4; 3],
+    inv: [f32x4; 3],
+    negative: [f32x4; 3],
+}
+
+impl Prepared {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        let inv = safe_inverse(ray.dir);
+        let zero = f32x4::splat(0.0);
+        let inv = [f32x4::splat(inv.x), f32x4::splat(inv.y), f32x4::splat(inv.z)];
+        Prepared {
+            origin: [
+                f32x4::splat(ray.origin.x),
+                f32x4::splat(ray.origin.y),
+                f32x4::splat(ray.origin.z),
+            ],
+            negative: [inv[0].simd_lt(zero), inv[1].simd_lt(zero), inv[2].simd_lt(zero)],
+            inv,
+        }
+    }
+}
+
+impl Bvh4<'_> {
+    /// The four children's entry distances and the mask of those the ray enters within `[t_min, t_max]`.
+    #[inline(always)]
+    fn slab4(&self, node: u32, r: &Prepared, t_min: f32, t_max: f32) -> (f32x4, u32) {
+        let n = &self.nodes[node as usize];
+        let mut near = f32x4::splat(t_min);
+        let mut far = f32x4::splat(f32::INFINITY);
+        for axis in 0..3 {
+            let lo = (f32x4::new(n.min[axis]) - r.origin[axis]) * r.inv[axis];
+            let hi = (f32x4::new(n.max[axis]) - r.origin[axis]) * r.inv[axis];
+            near = near.fast_max(r.negative[axis].select(hi, lo));
+            far = far.fast_min(r.negative[axis].select(lo, hi));
+        }
+        let far = (far * f32x4::splat(SLAB_ROBUST)).fast_min(f32x4::splat(t_max));
+        (near, near.simd_le(far).to_bitmask())
+    }
+
+    /// Tests the primitives of a leaf; true if the search is over (any-hit found one).
+    #[inline(always)]
+    fn leaf<P: HitPolicy>(
+        &self,
+        r: ChildRef,
+        ray: &Ray,
+        t_min: f32,
+        hit: &mut Hit,
+        found: &mut bool,
+    ) -> bool {
+        for &id in &self.ids[leaf_range(r)] {
+            if let Some((t, u, v)) = self.prims.intersect(id, ray, t_min, hit.t) {
+                *hit = Hit { t, prim: id, u, v };
+                *found = true;
+                if P::ANY {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// The one single-ray traversal for both policies.
+    #[inline]
+    pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        let mut found = self.prims.intersect_planes(ray, t_min, hit);
+        if (P::ANY && found) || self.root == EMPTY {
+            return found;
+        }
+        let r = Prepared::new(ray);
+        let mut stack = [(0 as ChildRef, 0f32); STACK];
+        let mut sp = 0;
+        let mut current = self.root;
+        loop {
+            if current & LEAF != 0 {
+                if self.leaf::<P>(current, ray, t_min, hit, &mut found) {
+                    return true;
+                }
+            } else {
+                let (near, mut mask) = self.slab4(current, &r, t_min, hit.t * CULL_MARGIN);
+                if mask != 0 {
+                    let node = &self.nodes[current as usize];
+                    let t = near.to_array();
+                    if mask.count_ones() == 1 {
+                        current = node.child[mask.trailing_zeros() as usize];
+                        continue;
+                    }
+                    // Push the hit children, then order the pushed run far-to-near so the nearest is popped
+                    // first (any-hit keeps the order it found).
+                    let start = sp;
+                    while mask != 0 {
+                        let k = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        stack[sp] = (node.child[k], t[k]);
+                        sp += 1;
+                    }
+                    if !P::ANY {
+                        sort_far_to_near(&mut stack[start..sp]);
+                    }
+                }
+            }
+            // Pop the next subtree that may still hold a closer hit.
+            loop {
+                if sp == 0 {
+                    return found;
+                }
+                sp -= 1;
+                let (c, t_enter) = stack[sp];
+                if P::ANY || t_enter <= hit.t * CULL_MARGIN {
+                    current = c;
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// Sorts 2 to 4 entries by decreasing entry distance (insertion sort: at most six compares).
+#[inline(always)]
+fn sort_far_to_near(run: &mut [(ChildRef, f32)]) {
+    for i in 1..run.len() {
+        let mut j = i;
+        while j > 0 && run[j - 1].1 < run[j].1 {
+            run.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+}

@@ -1,0 +1,818 @@
+//! A uniform grid: the scene's box cut into equal cells, each listing the primitives whose bounding box
+//! overlaps it, walked cell by cell along the ray with the 3D-DDA of J. Amanatides, A. Woo, "A Fast Voxel
+//! Traversal Algorithm for Ray Tracing", *Eurographics* 1987.
+//!
+//! The cell lists are stored flat, CSR-like: `refs[cell_start[c]..cell_start[c + 1]]` are the ids in cell
+//! `c`, filled by a counting pass and then a fill pass, so a build makes three allocations whatever the
+//! scene.
+
+use std::fmt;
+
+use glam::Vec3;
+
+use super::policy::HitPolicy;
+use super::prims::{Hit, Prims};
+use crate::geometry::{aabb::Aabb, cuboid, ray::Ray};
+
+/// Cells per primitive the resolution aims at (the `density` of the cube-root rule). Measured on
+/// `scenes/dragon.p3f` (100k triangles on a 13 × 13 floor: most cells are empty air), 800 × 600 camera
+/// rays, closest hit, one thread: density 2 → 1.85 s, 3 → 1.62 s, 4 → 1.48 s, 6 → 1.39 s; the SPD gears,
+/// rings and tree scenes are within noise from 2 to 6. 4 takes most of the gain for its memory (cells grow
+/// linearly with it, and the gain flattens beyond).
+const DENSITY: f64 = 4.0;
+/// Most cells along one axis.
+const MAX_AXIS_CELLS: u32 = 512;
+/// Most cells, and most references, before the resolution is lowered: 64 Mi of each (256 MiB apiece)
+/// bounds the grid's memory whatever the primitives' sizes.
+const MAX_ENTRIES: u64 = 64 << 20;
+/// Ids remembered per ray, direct-mapped on the id's low bits (a power of two).
+const MAILBOX: usize = 32;
+/// Relative slack on the walk's stopping test: a hit's `t` and a cell boundary's `t` carry a few ulps of
+/// rounding each, so the walk goes on one cell further while the closest hit is within this of the boundary.
+const T_SLACK: f32 = 1e-5;
+
+/// The cells' geometry: where the grid lies and how it is cut.
+#[derive(Clone, Copy, Debug)]
+struct Lattice {
+    /// The grid's box (the primitives' union, padded).
+    bounds: Aabb,
+    /// Cells per axis.
+    res: [u32; 3],
+    /// Edge lengths of a cell.
+    size: Vec3,
+    /// Their reciprocals.
+    inv_size: Vec3,
+}
+
+impl Lattice {
+    fn new(bounds: Aabb, res: [u32; 3]) -> Self {
+        let size = bounds.extent() / Vec3::from_array(res.map(|n| n as f32));
+        Lattice {
+            bounds,
+            res,
+            size,
+            inv_size: size.recip(),
+        }
+    }
+
+    fn cells(&self) -> u64 {
+        self.res.iter().map(|&n| n as u64).product()
+    }
+
+    /// The cell containing `p`, clamped to the grid (NaN lands in cell 0).
+    #[inline]
+    fn cell_of(&self, p: Vec3) -> [u32; 3] {
+        let c = ((p - self.bounds.min) * self.inv_size).floor();
+        std::array::from_fn(|a| (c[a] as i64).clamp(0, self.res[a] as i64 - 1) as u32)
+    }
+
+    /// The linear index of cell `c`, x fastest.
+    fn index(&self, c: [u32; 3]) -> usize {
+        c[0] as usize + self.res[0] as usize * (c[1] as usize + self.res[1] as usize * c[2] as usize)
+    }
+
+    /// The coordinate of the `j`-th cell boundary plane on axis `a`, computed the same way for the walk as
+    /// for the cells' extents.
+    #[inline]
+    fn plane(&self, a: usize, j: i32) -> f32 {
+        self.bounds.min[a] + j as f32 * self.size[a]
+    }
+
+    /// The inclusive cell ranges overlapped by `b` grown by `slack`.
+    fn range(&self, b: &Aabb, slack: Vec3) -> ([u32; 3], [u32; 3]) {
+        (self.cell_of(b.min - slack), self.cell_of(b.max + slack))
+    }
+}
+
+/// The number of cells in the inclusive range `lo..=hi`.
+fn range_cells(lo: [u32; 3], hi: [u32; 3]) -> u64 {
+    (0..3).map(|a| (hi[a] - lo[a] + 1) as u64).product()
+}
+
+/// Cells per axis by the cube-root rule (Cleary & Wyvill 1988, Woo 1992):
+/// `n_i = extent_i * cbrt(density * count / volume)`. An axis that would get less than one cell (a flat or
+/// thin scene) gets one, and the rule is solved again over the other axes with the same cell budget, so a
+/// flat scene is cut as a square grid of about `density * count` cells rather than a single row. In f64:
+/// the padded extent of a point-like scene is ~1e-30, whose cube underflows an f32.
+fn resolution(extent: Vec3, count: usize, density: f64) -> [u32; 3] {
+    let extent = extent.as_dvec3();
+    let budget = density * count as f64;
+    let mut free = [true; 3];
+    let mut scale = 0.0;
+    for _ in 0..3 {
+        let k = free.iter().filter(|&&f| f).count();
+        if k == 0 {
+            break;
+        }
+        let measure: f64 = (0..3).filter(|&a| free[a]).map(|a| extent[a]).product();
+        scale = (budget / measure).powf(1.0 / k as f64);
+        let mut changed = false;
+        for a in 0..3 {
+            if free[a] && extent[a] * scale < 1.0 {
+                free[a] = false;
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    std::array::from_fn(|a| {
+        if free[a] {
+            ((extent[a] * scale).round() as u32).clamp(1, MAX_AXIS_CELLS)
+        } else {
+            1
+        }
+    })
+}
+
+/// The smallest `f32` above `t` (`f32::next_up` needs Rust 1.86; the crate supports 1.85). `t` is finite.
+#[inline]
+fn next_up(t: f32) -> f32 {
+    if t == 0.0 {
+        f32::from_bits(1)
+    } else if t > 0.0 {
+        f32::from_bits(t.to_bits() + 1)
+    } else {
+        f32::from_bits(t.to_bits() - 1)
+    }
+}
+
+/// A uniform grid over the bounded primitives; planes are tested beside it.
+#[derive(Clone)]
+pub struct Grid<'a> {
+    prims: Prims<'a>,
+    lattice: Lattice,
+    /// `cell_start[c]..cell_start[c + 1]` indexes `refs` for cell `c`; one entry per cell plus one.
+    cell_start: Vec<u32>,
+    /// Primitive ids, cell after cell, ascending within a cell.
+    refs: Vec<u32>,
+    /// Bounded primitives whose bounds are not finite (overflowed or NaN coordinates): they cannot be
+    /// placed in cells, so every ray tests them, like the planes, and results stay those of brute force.
+    loose: Vec<u32>,
+}
+
+/// Size figures of a built grid, for `whitted info`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GridStats {
+    /// Cells per axis (all zero when there is nothing to grid).
+    pub resolution: [u32; 3],
+    /// Number of cells.
+    pub cells: u64,
+    /// Primitive references, summed over cells.
+    pub references: u64,
+    /// Cells referencing nothing.
+    pub empty_cells: u64,
+    /// Bounded primitives with non-finite bounds, tested by every ray.
+    pub loose: u32,
+}
+
+impl fmt::Display for GridStats {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let [x, y, z] = self.resolution;
+        write!(
+            f,
+            "grid {x}x{y}x{z}: {} cells ({} empty), {} references ({:.2} per non-empty cell)",
+            self.cells,
+            self.empty_cells,
+            self.references,
+            self.references as f64 / (self.cells - self.empty_cells).max(1) as f64
+        )?;
+        if self.loose > 0 {
+            write!(f, ", {} primitives outside the grid", self.loose)?;
+        }
+        Ok(())
+    }
+}
+
+impl fmt::Debug for Grid<'_> {
+    /// The figures, not the millions of references.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Grid")
+            .field("stats", &self.stats())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'a> Grid<'a> {
+    /// Builds the grid over the bounded primitives' boxes.
+    pub fn build(prims: Prims<'a>) -> Self {
+        let mut boxes = Vec::with_capacity(prims.bounded() as usize);
+        let mut loose = Vec::new();
+        let mut union = Aabb::EMPTY;
+        for id in 0..prims.bounded() {
+            let b = prims.bounds(id);
+            if b.min.is_finite() && b.max.is_finite() && b.min.cmple(b.max).all() {
+                union = union.union(b);
+                boxes.push((id, b));
+            } else {
+                loose.push(id);
+            }
+        }
+        if boxes.is_empty() {
+            // Nothing to grid: every query tests the planes and loose primitives only.
+            return Grid {
+                prims,
+                lattice: Lattice::new(Aabb::EMPTY, [0; 3]),
+                cell_start: vec![0],
+                refs: Vec::new(),
+                loose,
+            };
+        }
+
+        // Rounding tolerances, from the scene's extent and from the magnitude of its coordinates (which
+        // bounds the absolute error of every point and plane computed in world space).
+        let magnitude = union.min.abs().max(union.max.abs()).max_element();
+        let ulps = 64.0 * f32::EPSILON * magnitude;
+        // Padding gives a flat scene's thin axis a non-zero extent (one cell), and keeps hit points
+        // rounded slightly off a primitive on the boundary inside the grid.
+        let pad = (1e-4 * union.extent().max_element()).max(ulps).max(1e-30);
+        let bounds = Aabb::new(union.min - pad, union.max + pad);
+
+        let mut lattice = Lattice::new(bounds, resolution(bounds.extent(), boxes.len(), DENSITY));
+        // A primitive is placed in every cell its box comes within `slack` of, so that a hit point or a
+        // cell boundary a few ulps off still finds it in the cell the walk visits.
+        let slack_of = |l: &Lattice| l.size * 1e-3 + Vec3::splat(ulps / 2.0);
+        let mut slack = slack_of(&lattice);
+        // Huge primitives overlap many cells each: lower the resolution until the grid fits its budget.
+        loop {
+            let references: u64 = boxes
+                .iter()
+                .map(|(_, b)| {
+                    let (lo, hi) = lattice.range(b, slack);
+                    range_cells(lo, hi)
+                })
+                .sum();
+            if (references <= MAX_ENTRIES && lattice.cells() <= MAX_ENTRIES) || lattice.res == [1; 3] {
+                break;
+            }
+            lattice = Lattice::new(bounds, lattice.res.map(|n| ((n as f32 * 0.8) as u32).max(1)));
+            slack = slack_of(&lattice);
+        }
+
+        // Counting pass: cell_start[c] counts cell c's references, then becomes the end of its run.
+        let cells = lattice.cells() as usize;
+        let mut cell_start = vec![0u32; cells + 1];
+        let for_each_cell = |lo: [u32; 3], hi: [u32; 3], f: &mut dyn FnMut(usize)| {
+            for z in lo[2]..=hi[2] {
+                for y in lo[1]..=hi[1] {
+                    let row = lattice.index([0, y, z]);
+                    for x in lo[0]..=hi[0] {
+                        f(row + x as usize);
+                    }
+                }
+            }
+        };
+        for (_, b) in &boxes {
+            let (lo, hi) = lattice.range(b, slack);
+            for_each_cell(lo, hi, &mut |c| cell_start[c] += 1);
+        }
+        let mut total = 0u32;
+        for s in &mut cell_start[..cells] {
+            total += *s;
+            *s = total;
+        }
+        cell_start[cells] = total;
+        // Fill pass, ids in descending order, each written just below its cell's end: every run ends up
+        // ascending and cell_start[c] moves back to the run's start.
+        let mut refs = vec![0u32; total as usize];
+        for &(id, b) in boxes.iter().rev() {
+            let (lo, hi) = lattice.range(&b, slack);
+            for_each_cell(lo, hi, &mut |c| {
+                cell_start[c] -= 1;
+                refs[cell_start[c] as usize] = id;
+            });
+        }
+
+        Grid {
+            prims,
+            lattice,
+            cell_start,
+            refs,
+            loose,
+        }
+    }
+
+    /// Size figures of the grid.
+    pub fn stats(&self) -> GridStats {
+        GridStats {
+            resolution: self.lattice.res,
+            cells: self.lattice.cells(),
+            references: self.refs.len() as u64,
+            empty_cells: self.cell_start.windows(2).filter(|w| w[0] == w[1]).count() as u64,
+            loose: self.loose.len() as u32,
+        }
+    }
+
+    /// Tests primitive `id`, updating `hit`; true if it was taken.
+    ///
+    /// Brute force keeps the lowest id among hits at equal `t`; cells visit ids in another order, so once
+    /// this traversal holds a hit, a hit at exactly the same `t` replaces it when its id is lower. `found`
+    /// says whether `hit` is this traversal's (the caller's limit stays exclusive).
+    #[inline(always)]
+    fn test(&self, id: u32, ray: &Ray, t_min: f32, hit: &mut Hit, found: &mut bool) -> bool {
+        let limit = if *found { next_up(hit.t) } else { hit.t };
+        match self.prims.intersect(id, ray, t_min, limit) {
+            Some((t, u, v)) if t < hit.t || id < hit.prim => {
+                *hit = Hit { t, prim: id, u, v };
+                *found = true;
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Finds the closest hit with `t` in `(t_min, hit.t)` and updates `hit`, or with `P::ANY` returns at
+    /// the first hit; true if there was one. The same contract and results as brute force.
+    #[inline]
+    pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        // Planes first: a near floor shortens the walk; ties with bounded ids are settled in `test`.
+        let mut found = self.prims.intersect_planes(ray, t_min, hit);
+        if P::ANY && found {
+            return true;
+        }
+        for &id in &self.loose {
+            if self.test(id, ray, t_min, hit, &mut found) && P::ANY {
+                return true;
+            }
+        }
+        if self.refs.is_empty() {
+            return found;
+        }
+        let l = &self.lattice;
+        let inv = ray.dir.recip();
+        let Some((t_enter, t_exit)) = cuboid::slab(l.bounds.min, l.bounds.max, ray.origin, inv, t_min, hit.t)
+        else {
+            return found;
+        };
+
+        // DDA set-up: the entry cell, and per axis the step, the index of the next boundary plane and the
+        // `t` at which the ray crosses it. A zero direction component never crosses a plane on that axis
+        // (infinite `t`, never stepped). The crossing is recomputed from the plane's index at each step
+        // rather than accumulated by adding `t_delta`: over 512 cells the sums can drift by hundreds of ulps,
+        // beyond the slack the stopping test allows, while this costs one multiply-add more per step.
+        let mut cell = l.cell_of(ray.at(t_enter)).map(|c| c as i32);
+        let mut index = l.index(cell.map(|c| c as u32));
+        let stride = [1, l.res[0] as isize, l.res[0] as isize * l.res[1] as isize];
+        let mut step = [0i32; 3];
+        let mut plane = [0i32; 3];
+        let mut t_next = [f32::INFINITY; 3];
+        for a in 0..3 {
+            if ray.dir[a] > 0.0 {
+                (step[a], plane[a]) = (1, cell[a] + 1);
+            } else if ray.dir[a] < 0.0 {
+                (step[a], plane[a]) = (-1, cell[a]);
+            } else {
+                continue;
+            }
+            t_next[a] = (l.plane(a, plane[a]) - ray.origin[a]) * inv[a];
+        }
+
+        // Ids tested so far by this ray. A test's outcome is final for the ray: every hit in the window is
+        // taken (not only those inside the current cell), and the window only shrinks, so a primitive
+        // seen again in a later cell need not be tested again.
+        let mut mailbox = [u32::MAX; MAILBOX];
+        loop {
+            let axis = if t_next[0] < t_next[1] {
+                if t_next[0] < t_next[2] { 0 } else { 2 }
+            } else if t_next[1] < t_next[2] {
+                1
+            } else {
+                2
+            };
+            let cell_exit = t_next[axis];
+            let run = self.cell_start[index] as usize..self.cell_start[index + 1] as usize;
+            for &id in &self.refs[run] {
+                let slot = &mut mailbox[id as usize & (MAILBOX - 1)];
+                if *slot == id {
+                    continue;
+                }
+                *slot = id;
+                if self.test(id, ray, t_min, hit, &mut found) && P::ANY {
+                    return true;
+                }
+            }
+            // Every primitive with a hit before this cell's exit lies in a cell visited by now, so the walk
+            // ends once the closest hit (or the end of the clipped segment) is before that exit. A hit is
+            // taken wherever it lies, not only within the cell: it can only shorten the window.
+            let end = hit.t.min(t_exit);
+            if end + T_SLACK * end.abs() < cell_exit || cell_exit == f32::INFINITY {
+                break;
+            }
+            cell[axis] += step[axis];
+            if cell[axis] as u32 >= l.res[axis] {
+                break;
+            }
+            index = index.wrapping_add_signed(step[axis] as isize * stride[axis]);
+            plane[axis] += step[axis];
+            t_next[axis] = (l.plane(axis, plane[axis]) - ray.origin[axis]) * inv[axis];
+        }
+        found
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+    use crate::accel::brute::Brute;
+    use crate::accel::policy::{AnyHit, Closest};
+    use crate::geometry::ray::testing::TestRng;
+    use crate::render::camera::RayCamera;
+    use crate::scene::{Camera, Material, Scene};
+
+    /// Counts of what the comparisons exercised.
+    #[derive(Default, Debug)]
+    struct Tally {
+        rays: usize,
+        hits: usize,
+    }
+
+    /// Traces `ray` through the grid and brute force, closest and any-hit, and asserts the same answers:
+    /// the whole hit record for closest hits (ties included), and any-hit just above and below the
+    /// closest `t`. Returns brute force's closest hit.
+    fn check(grid: &Grid, brute: &Brute, ray: &Ray, t_min: f32, t_max: f32, tally: &mut Tally) -> Hit {
+        let mut want = Hit::miss(t_max);
+        brute.traverse::<Closest>(ray, t_min, &mut want);
+        let mut got = Hit::miss(t_max);
+        let found = grid.traverse::<Closest>(ray, t_min, &mut got);
+        assert_eq!(
+            found,
+            want.is_hit(),
+            "{ray:?} t_min {t_min}: {got:?} vs brute {want:?}"
+        );
+        assert_eq!(got, want, "{ray:?} t_min {t_min}");
+        let limits = if want.is_hit() {
+            [want.t * 1.001 + 1e-30, want.t * 0.999, t_max]
+        } else {
+            [t_max, 1.0, 1e30]
+        };
+        for limit in limits {
+            let expect = want.is_hit() && want.t < limit;
+            let mut any = Hit::miss(limit.min(t_max));
+            assert_eq!(
+                grid.traverse::<AnyHit>(ray, t_min, &mut any),
+                expect,
+                "any-hit {ray:?} t_min {t_min} t_max {limit}: closest {want:?}"
+            );
+            if expect {
+                assert!(any.t > t_min && any.t < limit, "{any:?}");
+            }
+        }
+        tally.rays += 1;
+        tally.hits += want.is_hit() as usize;
+        want
+    }
+
+    /// Runs `count` rays of each kind through `scene`: random origins in and around its box with random
+    /// and axis-aligned directions, rays along the grid's cell boundary planes, camera rays, and rays
+    /// leaving the surfaces hit (`t_min = 1e-4`).
+    fn compare(scene: &Scene, count: usize, seed: u64) -> Tally {
+        let prims = Prims::new(scene);
+        let grid = Grid::build(prims);
+        let brute = Brute::new(prims);
+        let mut rng = TestRng::new(seed);
+        let mut tally = Tally::default();
+        let b = scene.bounds();
+        let (lo, hi) = if b.is_empty() {
+            (Vec3::splat(-5.0), Vec3::splat(5.0))
+        } else {
+            let e = b.extent().max(Vec3::splat(1e-3 * b.extent().max_element()));
+            (b.min - 0.5 * e, b.max + 0.5 * e)
+        };
+        let origin = |rng: &mut TestRng| lo + (hi - lo) * rng.vec3(0.0, 1.0);
+        let axes = [Vec3::X, Vec3::Y, Vec3::Z, Vec3::NEG_X, Vec3::NEG_Y, Vec3::NEG_Z];
+        let mut surface = Vec::new();
+        for i in 0..count {
+            // Random direction; every third one with a zero component, every fifth along an axis.
+            let mut dir = rng.direction();
+            if i % 3 == 0 {
+                dir[i % 7 % 3] = 0.0;
+            }
+            if i % 5 == 0 {
+                dir = axes[i % 6];
+            }
+            let o = origin(&mut rng);
+            // Every fourth at a primitive, so that small ones in large scenes get hit too.
+            if i % 4 == 1 && prims.bounded() > 0 {
+                let b = prims.bounds((rng.unit_f32() * prims.bounded() as f32) as u32);
+                let aim = (b.min + b.extent() * rng.vec3(0.0, 1.0) - o).normalize();
+                if aim.is_finite() {
+                    dir = aim;
+                }
+            }
+            let ray = Ray::new(o, dir);
+            let hit = check(&grid, &brute, &ray, 0.0, f32::INFINITY, &mut tally);
+            if hit.is_hit() {
+                surface.push(ray.at(hit.t));
+            }
+        }
+        // Along cell boundary planes: an origin coordinate on a plane of the lattice and no motion across it.
+        let l = grid.lattice;
+        if !grid.refs.is_empty() {
+            for i in 0..count / 4 {
+                let mut o = origin(&mut rng);
+                let a = i % 3;
+                o[a] = l.plane(a, (rng.unit_f32() * (l.res[a] + 1) as f32) as i32);
+                let mut dir = rng.direction();
+                dir[a] = 0.0;
+                if i % 2 == 0 {
+                    let b = (a + 1) % 3;
+                    o[b] = l.plane(b, (rng.unit_f32() * (l.res[b] + 1) as f32) as i32);
+                    dir[b] = 0.0;
+                }
+                check(&grid, &brute, &Ray::new(o, dir), 0.0, f32::INFINITY, &mut tally);
+            }
+        }
+        // Camera rays on a regular lattice of the image.
+        let side = (count as f32).sqrt().ceil() as u32;
+        let camera = RayCamera::new(&scene.camera, side, side);
+        for y in 0..side {
+            for x in 0..side {
+                let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+                let hit = check(&grid, &brute, &ray, 0.0, f32::INFINITY, &mut tally);
+                if hit.is_hit() && (x + y) % 2 == 0 {
+                    surface.push(ray.at(hit.t));
+                }
+            }
+        }
+        // From the surfaces hit, in random directions (half with a finite segment, as shadow rays have).
+        for (i, p) in surface.into_iter().enumerate() {
+            let ray = Ray::new(p, rng.direction());
+            let t_max = if i % 2 == 0 {
+                f32::INFINITY
+            } else {
+                rng.range(0.0, (hi - lo).length())
+            };
+            check(&grid, &brute, &ray, 1e-4, t_max, &mut tally);
+        }
+        tally
+    }
+
+    /// A camera looking at the origin from `(3, -30, 20)`.
+    fn camera() -> Camera {
+        Camera::new(Vec3::new(3.0, -30.0, 20.0), Vec3::ZERO, Vec3::Z, 50.0, 64, 64)
+    }
+
+    /// Mixed primitives of widely different sizes: small and huge spheres (some inside-only), triangles,
+    /// boxes (some flat, one infinite), cones and cylinders, duplicates (exact ties), a zero-height cone, two
+    /// planes.
+    fn mixed_scene(seed: u64) -> Scene {
+        let mut rng = TestRng::new(seed);
+        let mut s = Scene::new(camera());
+        let m = s.add_material(Material::default());
+        let size = |rng: &mut TestRng, i: usize| {
+            if i % 23 == 0 {
+                rng.range(5.0, 20.0)
+            } else {
+                rng.range(0.05, 1.5)
+            }
+        };
+        for i in 0..80 {
+            let r = size(&mut rng, i);
+            s.add_sphere(rng.vec3(-10.0, 10.0), if i % 9 == 0 { -r } else { r }, m);
+        }
+        for i in 0..150 {
+            let a = rng.vec3(-10.0, 10.0);
+            let r = size(&mut rng, i);
+            let (b, c) = (a + r * rng.direction(), a + r * rng.direction());
+            s.add_triangle(a, b, c, m);
+            if i % 10 == 0 {
+                s.add_triangle(a, b, c, m);
+            }
+        }
+        for i in 0..40 {
+            let a = rng.vec3(-10.0, 10.0);
+            let mut e = Vec3::new(size(&mut rng, i), size(&mut rng, i + 1), size(&mut rng, i + 2));
+            if i % 7 == 0 {
+                e.z = 0.0;
+            }
+            s.add_box(a, a + e, m);
+            if i % 8 == 0 {
+                s.add_box(a, a + e, m);
+            }
+        }
+        for i in 0..30 {
+            let base = rng.vec3(-10.0, 10.0);
+            let apex = base + size(&mut rng, i) * rng.direction();
+            let r = rng.range(0.1, 1.0);
+            let top = if i % 3 == 0 { r } else { rng.range(0.0, 1.0) };
+            let sign = if i % 11 == 0 { -1.0 } else { 1.0 };
+            s.add_cone(base, sign * r, apex, sign * top, m);
+        }
+        s.add_cone(Vec3::ONE, 1.0, Vec3::ONE, 0.5, m);
+        // Unbounded on four sides: outside the grid, tested by every ray.
+        let corner = Vec3::new(12.0, -12.0, 0.0);
+        s.add_box(
+            corner.with_y(f32::NEG_INFINITY).with_z(f32::NEG_INFINITY),
+            corner.with_x(f32::INFINITY).with_z(f32::INFINITY),
+            m,
+        );
+        s.add_plane(
+            Vec3::new(0.0, 0.0, -12.0),
+            Vec3::new(1.0, 0.0, -12.0),
+            Vec3::new(0.0, 1.0, -12.0),
+            m,
+        );
+        s.add_plane(
+            Vec3::new(0.0, 30.0, 0.0),
+            Vec3::new(0.0, 30.0, 1.0),
+            Vec3::new(1.0, 30.0, 0.0),
+            m,
+        );
+        s
+    }
+
+    /// Everything in the plane z = 0: triangles and zero-thickness boxes, some huge, some duplicated.
+    fn flat_scene(seed: u64) -> Scene {
+        let mut rng = TestRng::new(seed);
+        let mut s = Scene::new(camera());
+        let m = s.add_material(Material::default());
+        let flat = |rng: &mut TestRng| rng.vec3(-10.0, 10.0).with_z(0.0);
+        for i in 0..250 {
+            let a = flat(&mut rng);
+            let r = if i % 31 == 0 { 15.0 } else { rng.range(0.05, 1.5) };
+            let (b, c) = (a + r * flat(&mut rng) / 10.0, a + r * flat(&mut rng) / 10.0);
+            s.add_triangle(a, b, c, m);
+        }
+        for i in 0..60 {
+            let a = flat(&mut rng);
+            let e = rng.vec3(0.05, if i % 17 == 0 { 12.0 } else { 1.0 }).with_z(0.0);
+            s.add_box(a, a + e, m);
+            if i % 6 == 0 {
+                s.add_box(a, a + e, m);
+            }
+        }
+        s
+    }
+
+    #[test]
+    fn mixed_scenes_match_brute_force() {
+        for seed in 0..3 {
+            let scene = mixed_scene(seed);
+            let t = compare(&scene, 6000, 100 + seed);
+            assert!(t.hits > t.rays / 4, "{t:?}");
+        }
+    }
+
+    #[test]
+    fn flat_scene_matches_brute_force() {
+        let scene = flat_scene(1);
+        let grid = Grid::build(Prims::new(&scene));
+        let [x, y, z] = grid.stats().resolution;
+        assert!(x > 4 && y > 4 && z == 1, "{}", grid.stats());
+        let t = compare(&scene, 12_000, 7);
+        assert!(t.hits > t.rays / 10, "{t:?}");
+    }
+
+    #[test]
+    fn degenerate_scenes_match_brute_force() {
+        // Planes only.
+        let mut s = Scene::new(camera());
+        let m = s.add_material(Material::default());
+        s.add_plane(Vec3::ZERO, Vec3::X, Vec3::Y, m);
+        let grid = Grid::build(Prims::new(&s));
+        assert_eq!(grid.stats().cells, 0);
+        compare(&s, 500, 1);
+        // A single sphere; point-like triangles (a grid of a few cells, not 512^3), one at the origin where
+        // the padding is all that gives the grid a size; a line of spheres (two flat axes).
+        let mut s = Scene::new(camera());
+        s.add_sphere(Vec3::new(1.0, 2.0, 3.0), 0.5, m);
+        compare(&s, 500, 2);
+        for p in [Vec3::ONE, Vec3::ZERO] {
+            let mut s = Scene::new(camera());
+            s.add_triangle(p, p, p, m);
+            assert!(Grid::build(Prims::new(&s)).stats().cells <= 8);
+            compare(&s, 100, 3);
+        }
+        let mut s = Scene::new(camera());
+        for i in 0..100 {
+            s.add_triangle(
+                Vec3::new(i as f32, 0.0, 0.0),
+                Vec3::new(i as f32 + 0.7, 0.0, 0.0),
+                Vec3::new(i as f32, 0.0, 0.0),
+                m,
+            );
+            s.add_sphere(Vec3::new(i as f32 + 0.5, 0.0, 0.0), 0.001, m);
+        }
+        let stats = Grid::build(Prims::new(&s)).stats();
+        assert!(
+            stats.resolution[0] > 50 && stats.resolution[1] == 1 && stats.resolution[2] == 1,
+            "{stats}"
+        );
+        let t = compare(&s, 2000, 4);
+        assert!(t.hits > 100, "{t:?}");
+    }
+
+    /// Boxes whose faces lie exactly on the grid's cell boundary planes: their hits fall on cell
+    /// boundaries, where the walk's crossing `t` and the box's `t` come from different roundings.
+    #[test]
+    fn boxes_on_cell_boundaries_match_brute_force() {
+        let scene = |planes: Option<&Lattice>, rng: &mut TestRng| {
+            let mut s = Scene::new(camera());
+            let m = s.add_material(Material::default());
+            // Two corner spheres fix the grid's box; the boxes stay inside it, so the lattice is the same
+            // whatever their placement.
+            s.add_sphere(Vec3::splat(-9.5), 0.5, m);
+            s.add_sphere(Vec3::splat(9.5), 0.5, m);
+            for i in 0..300 {
+                let (min, max) = match planes {
+                    None => (Vec3::ZERO, Vec3::ONE),
+                    Some(l) => {
+                        // One or two cells wide on each axis, between boundary planes 1 and res - 1.
+                        let mut min = Vec3::ZERO;
+                        let mut max = Vec3::ZERO;
+                        for a in 0..3 {
+                            let lo = 1 + (rng.unit_f32() * (l.res[a] - 3) as f32) as i32;
+                            let width = 1 + (rng.unit_f32() * 2.0) as i32;
+                            (min[a], max[a]) = (l.plane(a, lo), l.plane(a, lo + width));
+                        }
+                        // Some flat, lying in a boundary plane.
+                        if i % 5 == 0 {
+                            max[i % 3] = min[i % 3];
+                        }
+                        (min, max)
+                    }
+                };
+                s.add_box(min, max, m);
+            }
+            s
+        };
+        let mut rng = TestRng::new(11);
+        let probe = scene(None, &mut rng);
+        let lattice = Grid::build(Prims::new(&probe)).lattice;
+        let s = scene(Some(&lattice), &mut rng);
+        let grid = Grid::build(Prims::new(&s));
+        assert_eq!(grid.lattice.res, lattice.res);
+        assert_eq!(grid.lattice.bounds, lattice.bounds);
+        let t = compare(&s, 6000, 12);
+        assert!(t.hits > t.rays / 4, "{t:?}");
+    }
+
+    #[test]
+    fn huge_primitives_keep_memory_bounded() {
+        let mut s = Scene::new(camera());
+        let m = s.add_material(Material::default());
+        let mut rng = TestRng::new(3);
+        for _ in 0..20_000 {
+            s.add_sphere(rng.vec3(-1.0, 1.0), 0.001, m);
+        }
+        // Every cell overlaps these.
+        for _ in 0..2000 {
+            s.add_box(Vec3::splat(-1.0), Vec3::splat(1.0), m);
+        }
+        let stats = Grid::build(Prims::new(&s)).stats();
+        assert!(stats.references <= MAX_ENTRIES && stats.cells > 1000, "{stats}");
+    }
+
+    #[test]
+    fn stats_are_consistent() {
+        let scene = mixed_scene(9);
+        let grid = Grid::build(Prims::new(&scene));
+        let s = grid.stats();
+        assert_eq!(s.cells, s.resolution.iter().map(|&n| n as u64).product::<u64>());
+        assert_eq!(s.cells as usize + 1, grid.cell_start.len());
+        assert_eq!(s.loose, 1, "the infinite box");
+        assert!(s.references >= scene.bounded_count() as u64 - 1 && s.empty_cells < s.cells);
+        // Every run is ascending, and every primitive sits in the cell holding its box's centre.
+        for w in grid.cell_start.windows(2) {
+            assert!(
+                grid.refs[w[0] as usize..w[1] as usize]
+                    .windows(2)
+                    .all(|p| p[0] < p[1])
+            );
+        }
+        for id in (0..grid.prims.bounded()).filter(|id| !grid.loose.contains(id)) {
+            let c = grid
+                .lattice
+                .index(grid.lattice.cell_of(grid.prims.bounds(id).center()));
+            let run = grid.cell_start[c] as usize..grid.cell_start[c + 1] as usize;
+            assert!(grid.refs[run].contains(&id));
+        }
+        assert!(s.to_string().starts_with("grid "), "{s}");
+    }
+
+    fn load(name: &str) -> Scene {
+        crate::scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(name)).unwrap()
+    }
+
+    #[test]
+    fn spd_scenes_match_brute_force() {
+        for (i, name) in ["balls_1", "gears_1", "rings_1", "tree_1"]
+            .into_iter()
+            .enumerate()
+        {
+            let scene = load(&format!("scenes/spd/{name}.nff"));
+            let t = compare(&scene, 4000, 20 + i as u64);
+            assert!(t.hits > t.rays / 10, "{name}: {t:?}");
+        }
+    }
+
+    #[test]
+    fn dragon_matches_brute_force() {
+        let scene = load("scenes/dragon.p3f");
+        let t = compare(&scene, 400, 30);
+        assert!(t.hits > t.rays / 4, "{t:?}");
+    }
+}

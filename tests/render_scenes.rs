@@ -1,0 +1,101 @@
+//! Every scene renders, deterministically, and every accelerator gives the same image.
+
+mod common;
+
+use std::path::Path;
+
+use whitted::accel::{Accel, AccelKind, Prims};
+use whitted::render::{Options, Renderer};
+use whitted::scene::{self, Scene};
+
+fn render(scene: &Scene, kind: AccelKind, size: u32) -> Vec<u8> {
+    let accel = Accel::build(Prims::new(scene), kind);
+    let mut options = Options::new(scene);
+    (options.width, options.height) = (size, size);
+    Renderer::new(scene, &accel, options).render().to_rgb8(false)
+}
+
+/// Scenes whose brute-force render at 128x128 takes minutes: compared with brute force at 24x24.
+fn is_big(scene: &Scene) -> bool {
+    scene.bounded_count() > 10_000
+}
+
+fn check(path: &Path) {
+    let scene = scene::load(path).unwrap_or_else(|e| panic!("{e}"));
+    let a = render(&scene, AccelKind::Bvh4, 128);
+    let b = render(&scene, AccelKind::Bvh4, 128);
+    assert!(a == b, "{}: two renders differ", path.display());
+    assert_eq!(
+        render(&scene, AccelKind::Bvh2, 128),
+        a,
+        "{}: bvh2 differs from bvh4",
+        path.display()
+    );
+    assert_eq!(
+        render(&scene, AccelKind::Grid, 128),
+        a,
+        "{}: the grid differs from bvh4",
+        path.display()
+    );
+    let size = if is_big(&scene) { 24 } else { 128 };
+    let reference = render(&scene, AccelKind::None, size);
+    assert_eq!(
+        render(&scene, AccelKind::Bvh4, size),
+        reference,
+        "{}: bvh4 differs from brute force",
+        path.display()
+    );
+}
+
+#[test]
+fn every_scene_in_scenes_renders_the_same_with_every_accelerator() {
+    for path in common::scene_files(&common::root().join("scenes")) {
+        check(&path);
+    }
+}
+
+#[test]
+fn every_scene_in_shared_renders_the_same_with_every_accelerator() {
+    if let Some(shared) = common::shared() {
+        for path in common::scene_files(&shared.join("scenes")) {
+            check(&path);
+        }
+    }
+}
+
+/// The same render with 1 and 2 worker threads: tiles are independent, so the bytes are identical.
+#[test]
+fn thread_count_does_not_change_the_image() {
+    let scene = scene::load(&common::root().join("scenes/balls_medium.p3f")).unwrap();
+    let images: Vec<Vec<u8>> = [1, 2]
+        .iter()
+        .map(|&n| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap()
+                .install(|| render(&scene, AccelKind::Bvh4, 96))
+        })
+        .collect();
+    assert!(images[0] == images[1]);
+}
+
+/// `whitted render` with no scene writes the default scene's image; a failed write leaves nothing.
+#[test]
+fn cli_renders_the_default_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("default.png");
+    let run = common::whitted(&["render", "-o", out.to_str().unwrap(), "--width", "80", "--quiet"]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let img = image::open(&out).unwrap();
+    assert_eq!((img.width(), img.height()), (80, 60));
+    let bad = dir.path().join("nowhere").join("x.png");
+    let run = common::whitted(&["render", "-o", bad.to_str().unwrap(), "--width", "8", "--quiet"]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&run.stderr).contains("cannot write the image"));
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        1,
+        "no temporary file left behind"
+    );
+}
