@@ -40,5 +40,6 @@ pub mod error;
 pub mod geometry;
 pub mod render;
 pub mod scene;
+pub mod workload;
 
 pub use error::{Error, Result};

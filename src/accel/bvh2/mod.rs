@@ -53,9 +53,14 @@ pub struct Bvh2<'a> {
 pub const STACK: usize = 128;
 
 impl<'a> Bvh2<'a> {
-    /// Builds the tree.
+    /// Builds the tree for scalar leaf tests.
     pub fn new(prims: Prims<'a>, builder: Builder) -> Self {
-        let (nodes, ids) = build(&prims, builder);
+        Self::with_block(prims, builder, 1)
+    }
+
+    /// Builds the tree for leaves that test `block` primitives at the cost of one (see [`build`]).
+    pub fn with_block(prims: Prims<'a>, builder: Builder, block: usize) -> Self {
+        let (nodes, ids) = build(&prims, builder, block);
         Bvh2 { prims, nodes, ids }
     }
 

@@ -2,62 +2,104 @@
 //! opens the interior child with the largest surface area (the one a ray is most likely to enter), so the
 //! wide node replaces the most likely-visited binary levels.
 
-use super::{COUNT_BITS, ChildRef, EMPTY, LEAF, Node4};
+use super::tri4::Tri4;
+use super::{COUNT_BITS, ChildRef, EMPTY, LEAF, Node4, TRIANGLES};
 use crate::accel::bvh2::Node;
+use crate::accel::prims::{PrimKind, Prims};
 
-/// The nodes (depth-first, root first) and the root reference.
-pub fn collapse(nodes2: &[Node]) -> (Vec<Node4>, ChildRef) {
-    let Some(root) = nodes2.first() else {
-        return (Vec::new(), EMPTY);
+/// The collapsed tree: nodes depth-first (root first), the root reference, and the triangle blocks
+/// that triangle leaves point into, in the order a depth-first walk meets them.
+pub struct Collapsed {
+    pub nodes: Vec<Node4>,
+    pub root: ChildRef,
+    pub tris: Vec<Tri4>,
+}
+
+/// Collapses a BVH2 whose leaves hold one kind of primitive each.
+pub fn collapse(nodes2: &[Node], ids: &[u32], prims: &Prims) -> Collapsed {
+    let mut c = Collapser {
+        nodes2,
+        ids,
+        prims,
+        out: Collapsed {
+            nodes: Vec::with_capacity(nodes2.len() / 3 + 1),
+            root: EMPTY,
+            tris: Vec::with_capacity(nodes2.len() / 4),
+        },
     };
-    if root.is_leaf() {
-        return (Vec::new(), leaf_ref(root));
+    if let Some(root) = nodes2.first() {
+        c.out.root = if root.is_leaf() { c.leaf(root) } else { c.emit(0) };
     }
-    let mut out = Vec::with_capacity(nodes2.len() / 3 + 1);
-    emit(nodes2, 0, &mut out);
-    (out, 0)
+    c.out
 }
 
-fn leaf_ref(n: &Node) -> ChildRef {
-    debug_assert!(n.count < 1 << COUNT_BITS);
-    LEAF | (n.first << COUNT_BITS) | n.count
+struct Collapser<'a> {
+    nodes2: &'a [Node],
+    ids: &'a [u32],
+    prims: &'a Prims<'a>,
+    out: Collapsed,
 }
 
-/// Appends the 4-wide node for interior BVH2 node `i` and, after it, its subtrees in order.
-fn emit(nodes2: &[Node], i: usize, out: &mut Vec<Node4>) -> u32 {
-    let at = out.len();
-    out.push(Node4::EMPTY);
-    // Gather up to four BVH2 nodes under `i`.
-    let mut slots = [nodes2[i].first as usize, nodes2[i].first as usize + 1, 0, 0];
-    let mut len = 2;
-    while len < 4 {
-        let open = (0..len)
-            .filter(|&k| !nodes2[slots[k]].is_leaf())
-            .max_by(|&a, &b| {
-                nodes2[slots[a]]
-                    .bounds
-                    .area()
-                    .total_cmp(&nodes2[slots[b]].bounds.area())
-            });
-        let Some(k) = open else { break };
-        let n = &nodes2[slots[k]];
-        slots[k] = n.first as usize;
-        slots[len] = n.first as usize + 1;
-        len += 1;
-    }
-    let mut node = Node4::EMPTY;
-    for (k, &s) in slots[..len].iter().enumerate() {
-        let child = &nodes2[s];
-        for axis in 0..3 {
-            node.min[axis][k] = child.bounds.min[axis];
-            node.max[axis][k] = child.bounds.max[axis];
+impl Collapser<'_> {
+    /// A leaf reference: triangles are packed into SIMD blocks, other kinds keep their id range.
+    fn leaf(&mut self, n: &Node) -> ChildRef {
+        debug_assert!(n.count < 1 << COUNT_BITS);
+        let ids = &self.ids[n.first as usize..(n.first + n.count) as usize];
+        let lanes: Vec<(u32, usize)> = ids
+            .iter()
+            .filter_map(|&id| match self.prims.kind(id) {
+                PrimKind::Triangle(i) => Some((id, i)),
+                _ => None,
+            })
+            .collect();
+        if lanes.is_empty() {
+            return LEAF | (n.first << COUNT_BITS) | n.count;
         }
-        node.child[k] = if child.is_leaf() {
-            leaf_ref(child)
-        } else {
-            emit(nodes2, s, out)
-        };
+        debug_assert_eq!(lanes.len(), ids.len(), "leaves hold one kind");
+        let start = self.out.tris.len() as u32;
+        for chunk in lanes.chunks(4) {
+            self.out.tris.push(Tri4::pack(&self.prims.scene.triangles, chunk));
+        }
+        LEAF | TRIANGLES | (start << COUNT_BITS) | n.count
     }
-    out[at] = node;
-    at as u32
+
+    /// Appends the 4-wide node for interior BVH2 node `i` and, after it, its subtrees in order.
+    fn emit(&mut self, i: usize) -> u32 {
+        let nodes2 = self.nodes2;
+        let at = self.out.nodes.len();
+        self.out.nodes.push(Node4::EMPTY);
+        // Gather up to four BVH2 nodes under `i`.
+        let mut slots = [nodes2[i].first as usize, nodes2[i].first as usize + 1, 0, 0];
+        let mut len = 2;
+        while len < 4 {
+            let open = (0..len)
+                .filter(|&k| !nodes2[slots[k]].is_leaf())
+                .max_by(|&a, &b| {
+                    nodes2[slots[a]]
+                        .bounds
+                        .area()
+                        .total_cmp(&nodes2[slots[b]].bounds.area())
+                });
+            let Some(k) = open else { break };
+            let n = &nodes2[slots[k]];
+            slots[k] = n.first as usize;
+            slots[len] = n.first as usize + 1;
+            len += 1;
+        }
+        let mut node = Node4::EMPTY;
+        for (k, &s) in slots[..len].iter().enumerate() {
+            let child = &nodes2[s];
+            for axis in 0..3 {
+                node.min[axis][k] = child.bounds.min[axis];
+                node.max[axis][k] = child.bounds.max[axis];
+            }
+            node.child[k] = if child.is_leaf() {
+                self.leaf(child)
+            } else {
+                self.emit(s)
+            };
+        }
+        self.out.nodes[at] = node;
+        at as u32
+    }
 }

@@ -5,6 +5,7 @@
 
 mod collapse;
 mod traverse;
+pub mod tri4;
 
 use glam::Vec3;
 
@@ -12,17 +13,20 @@ use super::bvh2::{self, Builder, Bvh2, Stats};
 use super::prims::Prims;
 use crate::geometry::aabb::Aabb;
 
-/// A child reference: an interior node's index, a leaf (`LEAF | first << COUNT_BITS | count`), or
-/// [`EMPTY`].
+/// A child reference: an interior node's index, a leaf, or [`EMPTY`]. A leaf is
+/// `LEAF | start << COUNT_BITS | count`, with [`TRIANGLES`] set when it holds triangles: then `start` is
+/// its first block of [`tri4::Tri4`] (`⌈count / 4⌉` blocks), else the first of its ids.
 pub type ChildRef = u32;
 /// Marks a leaf reference.
 pub const LEAF: u32 = 1 << 31;
+/// Marks a leaf of triangles (tested four at a time).
+pub const TRIANGLES: u32 = 1 << 30;
 /// Bits of a leaf reference that hold its primitive count.
 pub const COUNT_BITS: u32 = 4;
 /// An unused child slot (its box is inverted, so no ray ever enters it).
 pub const EMPTY: ChildRef = u32::MAX;
-/// The most primitives a BVH4 can index: what fits a leaf reference beside its count.
-pub const MAX_PRIMS: u32 = 1 << (31 - COUNT_BITS);
+/// The most primitives a BVH4 can index: what fits a leaf reference's start beside its count.
+pub const MAX_PRIMS: u32 = 1 << (30 - COUNT_BITS);
 
 /// A node: four children's boxes as component arrays, then their references. 112 bytes, aligned to
 /// a 64-byte cache line so a node spans exactly two lines.
@@ -46,11 +50,13 @@ impl Node4 {
     };
 }
 
-/// Decodes a leaf reference into its range of the id array.
+/// A leaf reference's start (first block or first id) and primitive count.
 #[inline(always)]
-pub fn leaf_range(r: ChildRef) -> std::ops::Range<usize> {
-    let first = ((r & !LEAF) >> COUNT_BITS) as usize;
-    first..first + (r & ((1 << COUNT_BITS) - 1)) as usize
+pub fn leaf_parts(r: ChildRef) -> (usize, usize) {
+    (
+        ((r & !(LEAF | TRIANGLES)) >> COUNT_BITS) as usize,
+        (r & ((1 << COUNT_BITS) - 1)) as usize,
+    )
 }
 
 /// A 4-wide BVH over a scene's bounded primitives (planes are tested beside it).
@@ -61,6 +67,8 @@ pub struct Bvh4<'a> {
     pub nodes: Vec<Node4>,
     /// Primitive ids in leaf order (each leaf's primitives are contiguous).
     pub ids: Vec<u32>,
+    /// Triangle leaves' blocks, four triangles each in SoA form.
+    pub tris: Vec<tri4::Tri4>,
     /// The root reference (a node, a lone leaf, or [`EMPTY`] for a scene without bounded primitives).
     pub root: ChildRef,
     /// The box around everything.
@@ -73,17 +81,18 @@ impl<'a> Bvh4<'a> {
         if prims.bounded() > MAX_PRIMS {
             return None;
         }
-        Some(Self::from_bvh2(Bvh2::new(prims, Builder::Sah { bins })))
+        Some(Self::from_bvh2(Bvh2::with_block(prims, Builder::Sah { bins }, 4)))
     }
 
-    /// Collapses a BVH2 (whose leaves hold at most 15 primitives).
+    /// Collapses a BVH2 (whose leaves hold one kind, at most 15 primitives each).
     pub fn from_bvh2(bvh2: Bvh2<'a>) -> Self {
-        let (nodes, root) = collapse::collapse(&bvh2.nodes);
+        let c = collapse::collapse(&bvh2.nodes, &bvh2.ids, bvh2.prims());
         Bvh4 {
             prims: *bvh2.prims(),
-            nodes,
+            nodes: c.nodes,
             ids: bvh2.ids,
-            root,
+            tris: c.tris,
+            root: c.root,
             bounds: bvh2.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds),
         }
     }
@@ -96,8 +105,9 @@ impl<'a> Bvh4<'a> {
         )
     }
 
-    /// Node count (leaves included), depth, leaf sizes and SAH cost, weighted as for the BVH2: each node
-    /// visited costs one traversal step, each leaf its primitives, in proportion to their area.
+    /// Node count (leaves included), depth, leaf sizes and SAH cost, weighted as for the BVH2 (each node
+    /// visited costs one traversal step, each leaf one test per primitive, in proportion to their area,
+    /// so the figures compare across structures).
     pub fn stats(&self) -> Stats {
         let mut s = Stats::default();
         let root_area = self.bounds.area().max(f32::MIN_POSITIVE) as f64;
@@ -109,7 +119,7 @@ impl<'a> Bvh4<'a> {
             s.nodes += 1;
             s.depth = s.depth.max(depth);
             if r & LEAF != 0 {
-                let count = leaf_range(r).len();
+                let count = leaf_parts(r).1;
                 s.leaves += 1;
                 s.add_leaf(count);
                 s.sah += bvh2::INTERSECTION_COST as f64 * count as f64 * rel;

@@ -8,7 +8,7 @@
 
 use wide::f32x4;
 
-use super::{Bvh4, ChildRef, EMPTY, LEAF, leaf_range};
+use super::{Bvh4, ChildRef, EMPTY, LEAF, TRIANGLES, leaf_parts};
 use crate::accel::policy::HitPolicy;
 use crate::accel::prims::Hit;
 use crate::geometry::ray::{CULL_MARGIN, Ray, SLAB_ROBUST, safe_inverse};
@@ -59,7 +59,8 @@ impl Bvh4<'_> {
         (near, near.simd_le(far).to_bitmask())
     }
 
-    /// Tests the primitives of a leaf; true if the search is over (any-hit found one).
+    /// Tests the primitives of a leaf; true if the search is over (any-hit found one). Triangles go four
+    /// at a time through their SIMD blocks, other kinds one by one.
     #[inline(always)]
     fn leaf<P: HitPolicy>(
         &self,
@@ -69,7 +70,25 @@ impl Bvh4<'_> {
         hit: &mut Hit,
         found: &mut bool,
     ) -> bool {
-        for &id in &self.ids[leaf_range(r)] {
+        let (start, count) = leaf_parts(r);
+        if r & TRIANGLES != 0 {
+            for block in &self.tris[start..start + count.div_ceil(4)] {
+                if let Some((k, t, u, v)) = block.intersect(ray.origin, ray.dir, t_min, hit.t) {
+                    *hit = Hit {
+                        t,
+                        prim: block.id[k],
+                        u,
+                        v,
+                    };
+                    *found = true;
+                    if P::ANY {
+                        return true;
+                    }
+                }
+            }
+            return false;
+        }
+        for &id in &self.ids[start..start + count] {
             if let Some((t, u, v)) = self.prims.intersect(id, ray, t_min, hit.t) {
                 *hit = Hit { t, prim: id, u, v };
                 *found = true;
