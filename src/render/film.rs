@@ -79,15 +79,26 @@ impl Film {
             }
         };
         let tmp = temporary_name(path);
-        let result = if format == image::ImageFormat::OpenExr {
-            let data: Vec<f32> = self.pixels.iter().flat_map(|p| p.to_array()).collect();
-            image::Rgb32FImage::from_raw(self.width, self.height, data)
+        let result = match format {
+            image::ImageFormat::OpenExr => {
+                let data: Vec<f32> = self.pixels.iter().flat_map(|p| p.to_array()).collect();
+                image::Rgb32FImage::from_raw(self.width, self.height, data)
+                    .expect("buffer size matches")
+                    .save_with_format(&tmp, format)
+            }
+            image::ImageFormat::Pnm => {
+                // A binary P6 pixmap: the image crate's default PNM flavour is PAM (P7), which few
+                // viewers read under a .ppm name.
+                use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
+                std::fs::File::create(&tmp).map_err(image::ImageError::IoError).and_then(|file| {
+                    PnmEncoder::new(std::io::BufWriter::new(file))
+                        .with_subtype(PnmSubtype::Pixmap(SampleEncoding::Binary))
+                        .encode(&self.to_rgb8(srgb)[..], self.width, self.height, image::ExtendedColorType::Rgb8)
+                })
+            }
+            _ => image::RgbImage::from_raw(self.width, self.height, self.to_rgb8(srgb))
                 .expect("buffer size matches")
-                .save_with_format(&tmp, format)
-        } else {
-            image::RgbImage::from_raw(self.width, self.height, self.to_rgb8(srgb))
-                .expect("buffer size matches")
-                .save_with_format(&tmp, format)
+                .save_with_format(&tmp, format),
         };
         let result = result
             .map_err(|e| e.to_string())
@@ -144,5 +155,14 @@ mod tests {
         let bad = dir.path().join("missing-dir").join("b.png");
         assert!(film.write(&bad, false).is_err());
         assert!(film.write(&dir.path().join("c.gif"), false).is_err());
+        // PPM is a binary P6 pixmap; EXR keeps the linear, unclamped floats.
+        let ppm = dir.path().join("d.ppm");
+        film.write(&ppm, false).unwrap();
+        assert!(std::fs::read(&ppm).unwrap().starts_with(b"P6"));
+        assert_eq!(image::open(&ppm).unwrap().to_rgb8().get_pixel(1, 1).0, [255, 128, 0]);
+        film.pixels[0] = Vec3::new(2.5, 0.0, 0.0);
+        let exr = dir.path().join("e.exr");
+        film.write(&exr, false).unwrap();
+        assert_eq!(image::open(&exr).unwrap().to_rgb32f().get_pixel(0, 0).0, [2.5, 0.0, 0.0]);
     }
 }
