@@ -19,16 +19,7 @@ impl<'a> Brute<'a> {
     /// The one traversal: all ids, planes included; `hit.t` is the upper limit and shrinks on each hit.
     #[inline]
     pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
-        let mut found = false;
-        for id in 0..self.prims.total() {
-            if let Some((t, u, v)) = self.prims.intersect(id, ray, t_min, hit.t) {
-                *hit = Hit { t, prim: id, u, v };
-                found = true;
-                if P::ANY {
-                    break;
-                }
-            }
-        }
-        found
+        self.prims
+            .intersect_each::<P>(0..self.prims.total(), ray, t_min, hit)
     }
 }

@@ -327,7 +327,7 @@ impl<'a> Grid<'a> {
     #[inline]
     pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
         // Planes first: a near floor shortens the walk; ties with bounded ids are settled in `test`.
-        let mut found = self.prims.intersect_planes(ray, t_min, hit);
+        let mut found = self.prims.intersect_planes::<P>(ray, t_min, hit);
         if P::ANY && found {
             return true;
         }

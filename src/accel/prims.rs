@@ -6,6 +6,7 @@
 
 use glam::Vec3;
 
+use super::policy::HitPolicy;
 use crate::geometry::{aabb::Aabb, cone, cuboid, plane, ray::Ray, sphere, triangle};
 use crate::scene::{MaterialId, NO_NORMALS, Scene};
 
@@ -207,18 +208,35 @@ impl<'a> Prims<'a> {
         }
     }
 
-    /// Tests every plane, updating `hit`; true if one was hit. Planes are unbounded, so every accelerator
-    /// tests them this way, beside its hierarchy.
-    #[inline]
-    pub fn intersect_planes(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+    /// Tests the primitives `ids` in order, updating `hit` (closest-hit shrinks `hit.t`, any-hit stops at
+    /// the first); true if one was hit. Brute force, BVH leaves of mixed kinds and the planes beside every
+    /// hierarchy all go through this one loop.
+    #[inline(always)]
+    pub fn intersect_each<P: HitPolicy>(
+        &self,
+        ids: impl IntoIterator<Item = u32>,
+        ray: &Ray,
+        t_min: f32,
+        hit: &mut Hit,
+    ) -> bool {
         let mut found = false;
-        for id in self.planes() {
+        for id in ids {
             if let Some((t, u, v)) = self.intersect(id, ray, t_min, hit.t) {
                 *hit = Hit { t, prim: id, u, v };
                 found = true;
+                if P::ANY {
+                    break;
+                }
             }
         }
         found
+    }
+
+    /// Tests every plane (see [`Prims::intersect_each`]). Planes are unbounded, so every accelerator
+    /// tests them this way, beside its hierarchy.
+    #[inline]
+    pub fn intersect_planes<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        self.intersect_each::<P>(self.planes(), ray, t_min, hit)
     }
 
     /// The surface at a hit.

@@ -90,11 +90,18 @@ impl Film {
                 // A binary P6 pixmap: the image crate's default PNM flavour is PAM (P7), which few
                 // viewers read under a .ppm name.
                 use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
-                std::fs::File::create(&tmp).map_err(image::ImageError::IoError).and_then(|file| {
-                    PnmEncoder::new(std::io::BufWriter::new(file))
-                        .with_subtype(PnmSubtype::Pixmap(SampleEncoding::Binary))
-                        .encode(&self.to_rgb8(srgb)[..], self.width, self.height, image::ExtendedColorType::Rgb8)
-                })
+                std::fs::File::create(&tmp)
+                    .map_err(image::ImageError::IoError)
+                    .and_then(|file| {
+                        PnmEncoder::new(std::io::BufWriter::new(file))
+                            .with_subtype(PnmSubtype::Pixmap(SampleEncoding::Binary))
+                            .encode(
+                                &self.to_rgb8(srgb)[..],
+                                self.width,
+                                self.height,
+                                image::ExtendedColorType::Rgb8,
+                            )
+                    })
             }
             _ => image::RgbImage::from_raw(self.width, self.height, self.to_rgb8(srgb))
                 .expect("buffer size matches")
@@ -159,10 +166,16 @@ mod tests {
         let ppm = dir.path().join("d.ppm");
         film.write(&ppm, false).unwrap();
         assert!(std::fs::read(&ppm).unwrap().starts_with(b"P6"));
-        assert_eq!(image::open(&ppm).unwrap().to_rgb8().get_pixel(1, 1).0, [255, 128, 0]);
+        assert_eq!(
+            image::open(&ppm).unwrap().to_rgb8().get_pixel(1, 1).0,
+            [255, 128, 0]
+        );
         film.pixels[0] = Vec3::new(2.5, 0.0, 0.0);
         let exr = dir.path().join("e.exr");
         film.write(&exr, false).unwrap();
-        assert_eq!(image::open(&exr).unwrap().to_rgb32f().get_pixel(0, 0).0, [2.5, 0.0, 0.0]);
+        assert_eq!(
+            image::open(&exr).unwrap().to_rgb32f().get_pixel(0, 0).0,
+            [2.5, 0.0, 0.0]
+        );
     }
 }

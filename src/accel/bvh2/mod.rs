@@ -72,7 +72,7 @@ impl<'a> Bvh2<'a> {
     /// One traversal for closest and any hit: nearer child first, subtrees behind the closest hit skipped.
     #[inline]
     pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
-        let mut found = self.prims.intersect_planes(ray, t_min, hit);
+        let mut found = self.prims.intersect_planes::<P>(ray, t_min, hit);
         if (P::ANY && found) || self.nodes.is_empty() {
             return found;
         }
@@ -85,13 +85,14 @@ impl<'a> Bvh2<'a> {
         }
         loop {
             if node.is_leaf() {
-                for &id in &self.ids[node.first as usize..(node.first + node.count) as usize] {
-                    if let Some((t, u, v)) = self.prims.intersect(id, ray, t_min, hit.t) {
-                        *hit = Hit { t, prim: id, u, v };
-                        found = true;
-                        if P::ANY {
-                            return true;
-                        }
+                let ids = &self.ids[node.first as usize..(node.first + node.count) as usize];
+                if self
+                    .prims
+                    .intersect_each::<P>(ids.iter().copied(), ray, t_min, hit)
+                {
+                    found = true;
+                    if P::ANY {
+                        return true;
                     }
                 }
             } else {

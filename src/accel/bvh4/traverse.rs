@@ -88,22 +88,17 @@ impl Bvh4<'_> {
             }
             return false;
         }
-        for &id in &self.ids[start..start + count] {
-            if let Some((t, u, v)) = self.prims.intersect(id, ray, t_min, hit.t) {
-                *hit = Hit { t, prim: id, u, v };
-                *found = true;
-                if P::ANY {
-                    return true;
-                }
-            }
-        }
-        false
+        let hit_one =
+            self.prims
+                .intersect_each::<P>(self.ids[start..start + count].iter().copied(), ray, t_min, hit);
+        *found |= hit_one;
+        P::ANY && hit_one
     }
 
     /// The one single-ray traversal for both policies.
     #[inline]
     pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
-        let mut found = self.prims.intersect_planes(ray, t_min, hit);
+        let mut found = self.prims.intersect_planes::<P>(ray, t_min, hit);
         if (P::ANY && found) || self.root == EMPTY {
             return found;
         }
