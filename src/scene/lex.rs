@@ -4,6 +4,7 @@
 //! vector per line; gzip is recognised by its magic bytes, not by the file name. Every token carries its
 //! line and column so that every error can say `path:line:col`.
 
+use std::fmt;
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
@@ -241,7 +242,7 @@ impl Lexer {
     }
 
     /// The next token, or an error saying that `what` was expected at the end of the file.
-    pub fn expect_token(&mut self, what: &str) -> Result<Tok> {
+    pub fn expect_token(&mut self, what: impl fmt::Display) -> Result<Tok> {
         match self.next_token()? {
             Some(tok) => Ok(tok),
             None => Err(self.error_here(format!("expected {what}, found the end of the file"))),
@@ -250,7 +251,7 @@ impl Lexer {
 
     /// The next token, which must be exactly `word`.
     pub fn expect_word(&mut self, word: &str, context: &str) -> Result<Tok> {
-        let tok = self.expect_token(&format!("\"{word}\" {context}"))?;
+        let tok = self.expect_token(format_args!("\"{word}\" {context}"))?;
         if self.text(&tok) != word.as_bytes() {
             return Err(self.error_at(
                 &tok,
@@ -261,8 +262,8 @@ impl Lexer {
     }
 
     /// A finite number for `what` (NaN and infinities are errors: they poison every later computation).
-    pub fn expect_f32(&mut self, what: &str) -> Result<f32> {
-        let tok = self.expect_token(&format!("a number for {what}"))?;
+    pub fn expect_f32(&mut self, what: impl fmt::Display) -> Result<f32> {
+        let tok = self.expect_token(format_args!("a number for {what}"))?;
         let text = self.text(&tok);
         match parse_f32(text) {
             Some(v) if v.is_finite() => Ok(v),
@@ -278,7 +279,7 @@ impl Lexer {
     }
 
     /// Three finite numbers.
-    pub fn expect_vec3(&mut self, what: &str) -> Result<Vec3> {
+    pub fn expect_vec3(&mut self, what: impl fmt::Display + Copy) -> Result<Vec3> {
         Ok(Vec3::new(
             self.expect_f32(what)?,
             self.expect_f32(what)?,
@@ -287,7 +288,7 @@ impl Lexer {
     }
 
     /// A whole number in `0..=max`.
-    pub fn expect_uint(&mut self, what: &str, max: u64) -> Result<u64> {
+    pub fn expect_uint(&mut self, what: impl fmt::Display + Copy, max: u64) -> Result<u64> {
         let (tok, value) = self.expect_int(what)?;
         if value < 0 || value as u64 > max {
             return Err(self.error_at(
@@ -299,8 +300,8 @@ impl Lexer {
     }
 
     /// A whole number (sign allowed) and its token.
-    pub fn expect_int(&mut self, what: &str) -> Result<(Tok, i64)> {
-        let tok = self.expect_token(&format!("a whole number for {what}"))?;
+    pub fn expect_int(&mut self, what: impl fmt::Display) -> Result<(Tok, i64)> {
+        let tok = self.expect_token(format_args!("a whole number for {what}"))?;
         match parse_int(self.text(&tok)) {
             Some(v) => Ok((tok, v)),
             None => Err(self.error_at(

@@ -64,6 +64,20 @@ pub fn scene_around_mesh(mesh: &MeshData) -> Scene {
     scene
 }
 
+/// "vertex i of n of the polygon", formatted only when an error needs it.
+#[derive(Clone, Copy)]
+struct Vertex {
+    index: usize,
+    count: usize,
+    of: &'static str,
+}
+
+impl std::fmt::Display for Vertex {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "vertex {} of {} of the {}", self.index, self.count, self.of)
+    }
+}
+
 struct Parser {
     lx: Lexer,
     dir: PathBuf,
@@ -394,11 +408,16 @@ impl Parser {
         self.points.clear();
         self.normals.clear();
         for i in 0..n {
-            let what = format!("vertex {} of {n} of the polygon", i + 1);
-            self.points.push(self.lx.expect_vec3(&what)?);
+            // Described lazily: the text is only formatted if there is an error to report.
+            let what = Vertex {
+                index: i + 1,
+                count: n,
+                of: "polygon",
+            };
+            self.points.push(self.lx.expect_vec3(what)?);
             if smooth {
                 let tok = self.lx.peek()?;
-                let normal = self.lx.expect_vec3(&format!("the normal of {what}"))?;
+                let normal = self.lx.expect_vec3(format_args!("the normal of {what}"))?;
                 if normal.length_squared() == 0.0 {
                     let tok = tok.expect("a number was read");
                     return Err(self
@@ -485,10 +504,11 @@ impl Parser {
         let nf = self.count("the mesh's triangle count", 0)?;
         let mut positions = Vec::with_capacity(nv.min(TRUSTED_CAPACITY));
         for i in 0..nv {
-            positions.push(
-                self.lx
-                    .expect_vec3(&format!("vertex {} of {nv} of the mesh", i + 1))?,
-            );
+            positions.push(self.lx.expect_vec3(Vertex {
+                index: i + 1,
+                count: nv,
+                of: "mesh",
+            })?);
         }
         let m = self.current_material();
         for _ in 0..nf {
