@@ -226,6 +226,22 @@ impl Ctx<'_> {
     /// (S_R/S_P)·n_R·c_i; `None` (a leaf) when that costs more than testing the primitives directly and
     /// the node is small enough to be a leaf.
     fn sah(&self, ids: &mut [u32], bounds: &Aabb, centroids: &Aabb, bins: usize) -> Option<usize> {
+        // The bin arrays live on the stack and are cleared at every node: size them to the bin count
+        // (clearing 64 bins per node was 5% of a dragon.p3f render's instructions).
+        match bins {
+            0..=16 => self.sah_with::<16>(ids, bounds, centroids, bins),
+            17..=32 => self.sah_with::<32>(ids, bounds, centroids, bins),
+            _ => self.sah_with::<64>(ids, bounds, centroids, bins),
+        }
+    }
+
+    fn sah_with<const B: usize>(
+        &self,
+        ids: &mut [u32],
+        bounds: &Aabb,
+        centroids: &Aabb,
+        bins: usize,
+    ) -> Option<usize> {
         let n = ids.len();
         let extent = centroids.extent();
         if extent.max_element() <= 0.0 {
@@ -236,8 +252,8 @@ impl Ctx<'_> {
         let bin_of =
             |c: Vec3, axis: usize| (((c[axis] - centroids.min[axis]) * scale[axis]) as usize).min(bins - 1);
 
-        let mut count = [[0u32; 64]; 3];
-        let mut boxes = [[Aabb::EMPTY; 64]; 3];
+        let mut count = [[0u32; B]; 3];
+        let mut boxes = [[Aabb::EMPTY; B]; 3];
         for &id in ids.iter() {
             let i = &self.info[id as usize];
             for axis in 0..3 {
@@ -252,8 +268,8 @@ impl Ctx<'_> {
                 continue;
             }
             // Sweep from the right for the right-hand areas, then from the left evaluating each plane.
-            let mut right_area = [0f32; 64];
-            let mut right_count = [0u32; 64];
+            let mut right_area = [0f32; B];
+            let mut right_count = [0u32; B];
             let (mut b, mut c) = (Aabb::EMPTY, 0);
             for k in (1..bins).rev() {
                 b = b.union(boxes[axis][k]);
