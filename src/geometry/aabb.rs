@@ -67,6 +67,19 @@ impl Aabb {
         2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
     }
 
+    /// The hierarchies' slab test (Kay & Kajiya 1986): where a ray with origin `origin` and safe inverse
+    /// direction `inv` ([`super::ray::safe_inverse`]) enters the box within `[t_min, t_max]`, if it
+    /// does. The exit is widened by [`super::ray::SLAB_ROBUST`], so a ray through any point of the box,
+    /// its faces, edges and corners included, is never rejected by rounding.
+    #[inline(always)]
+    pub fn ray_entry(&self, origin: Vec3, inv: Vec3, t_min: f32, t_max: f32) -> Option<f32> {
+        let t0 = (self.min - origin) * inv;
+        let t1 = (self.max - origin) * inv;
+        let near = t0.min(t1).max_element().max(t_min);
+        let far = (t0.max(t1).min_element() * super::ray::SLAB_ROBUST).min(t_max);
+        (near <= far).then_some(near)
+    }
+
     /// True if `other` lies inside this box (borders included).
     pub fn contains(&self, other: &Aabb) -> bool {
         self.min.cmple(other.min).all() && self.max.cmpge(other.max).all()

@@ -32,7 +32,10 @@ impl Ray {
 
 /// `1 / dir` with zero (and tiny) components replaced by ±1e-18 first, as Embree does: every slab
 /// product `(bound − origin) · inv` is then finite (an origin exactly on a slab plane gives 0, never the
-/// NaN of 0 · ∞), so hierarchy tests need no NaN handling in their inner loop.
+/// NaN of 0 · ∞), so hierarchy tests need no NaN handling in their inner loop. The price: a ray with a
+/// zero direction component whose origin lies exactly on one of a box's planes on that axis (a ray
+/// running along the box's face) is cut off at t = 0 by that plane. Such rays graze the box; the
+/// triangles lying in that face are never hit by them either (the determinant is zero).
 #[inline]
 pub fn safe_inverse(dir: Vec3) -> Vec3 {
     const TINY: f32 = 1e-18;

@@ -9,7 +9,7 @@ use std::fmt;
 use super::policy::HitPolicy;
 use super::prims::{Hit, Prims};
 use crate::geometry::aabb::Aabb;
-use crate::geometry::ray::{CULL_MARGIN, Ray, SLAB_ROBUST, safe_inverse};
+use crate::geometry::ray::{CULL_MARGIN, Ray, safe_inverse};
 
 pub use build::{Builder, build};
 
@@ -80,7 +80,7 @@ impl<'a> Bvh2<'a> {
         let mut stack = [(0u32, 0f32); STACK];
         let mut sp = 0;
         let mut node = &self.nodes[0];
-        if slab(&node.bounds, ray.origin, inv, t_min, hit.t).is_none() {
+        if node.bounds.ray_entry(ray.origin, inv, t_min, hit.t).is_none() {
             return found;
         }
         loop {
@@ -100,8 +100,8 @@ impl<'a> Bvh2<'a> {
                     &self.nodes[node.first as usize],
                     &self.nodes[node.first as usize + 1],
                 );
-                let ta = slab(&a.bounds, ray.origin, inv, t_min, hit.t * CULL_MARGIN);
-                let tb = slab(&b.bounds, ray.origin, inv, t_min, hit.t * CULL_MARGIN);
+                let ta = a.bounds.ray_entry(ray.origin, inv, t_min, hit.t * CULL_MARGIN);
+                let tb = b.bounds.ray_entry(ray.origin, inv, t_min, hit.t * CULL_MARGIN);
                 match (ta, tb) {
                     (Some(ta), Some(tb)) => {
                         let (near, far, t_far) = if ta <= tb {
@@ -165,16 +165,6 @@ impl<'a> Bvh2<'a> {
         }
         s
     }
-}
-
-/// The ray's parameter interval inside `b`, clipped to `[t_min, t_max]`, if not empty: its entry.
-#[inline(always)]
-fn slab(b: &Aabb, origin: glam::Vec3, inv: glam::Vec3, t_min: f32, t_max: f32) -> Option<f32> {
-    let t0 = (b.min - origin) * inv;
-    let t1 = (b.max - origin) * inv;
-    let near = t0.min(t1).max_element().max(t_min);
-    let far = (t0.max(t1).min_element() * SLAB_ROBUST).min(t_max);
-    (near <= far).then_some(near)
 }
 
 /// Shape and quality figures of a hierarchy, for `whitted info`.
