@@ -45,20 +45,23 @@ impl Collapser<'_> {
     fn leaf(&mut self, n: &Node) -> ChildRef {
         debug_assert!(n.count < 1 << COUNT_BITS);
         let ids = &self.ids[n.first as usize..(n.first + n.count) as usize];
-        let lanes: Vec<(u32, usize)> = ids
-            .iter()
-            .filter_map(|&id| match self.prims.kind(id) {
-                PrimKind::Triangle(i) => Some((id, i)),
-                _ => None,
-            })
-            .collect();
-        if lanes.is_empty() {
+        // Leaves hold one kind (the builder splits mixed ones), so the first id tells.
+        if !matches!(self.prims.kind(ids[0]), PrimKind::Triangle(_)) {
             return LEAF | (n.first << COUNT_BITS) | n.count;
         }
-        debug_assert_eq!(lanes.len(), ids.len(), "leaves hold one kind");
         let start = self.out.tris.len() as u32;
-        for chunk in lanes.chunks(4) {
-            self.out.tris.push(Tri4::pack(&self.prims.scene.triangles, chunk));
+        let mut lanes = [(0u32, 0usize); 4];
+        for chunk in ids.chunks(4) {
+            let mut len = 0;
+            for &id in chunk {
+                if let PrimKind::Triangle(i) = self.prims.kind(id) {
+                    lanes[len] = (id, i);
+                    len += 1;
+                }
+            }
+            self.out
+                .tris
+                .push(Tri4::pack(&self.prims.scene.triangles, &lanes[..len]));
         }
         LEAF | TRIANGLES | (start << COUNT_BITS) | n.count
     }
