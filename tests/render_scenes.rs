@@ -5,13 +5,18 @@ mod common;
 use std::path::Path;
 
 use whitted::accel::{Accel, AccelKind, Prims};
-use whitted::render::{Options, Renderer};
+use whitted::render::{Kernel, Options, Renderer};
 use whitted::scene::{self, Scene};
 
 fn render(scene: &Scene, kind: AccelKind, size: u32) -> Vec<u8> {
+    render_with(scene, kind, size, Kernel::Single)
+}
+
+fn render_with(scene: &Scene, kind: AccelKind, size: u32, kernel: Kernel) -> Vec<u8> {
     let accel = Accel::build(Prims::new(scene), kind);
     let mut options = Options::new(scene);
     (options.width, options.height) = (size, size);
+    options.kernel = kernel;
     Renderer::new(scene, &accel, options).render().to_rgb8(false)
 }
 
@@ -25,6 +30,15 @@ fn check(path: &Path) {
     let a = render(&scene, AccelKind::Bvh4, 128);
     let b = render(&scene, AccelKind::Bvh4, 128);
     assert!(a == b, "{}: two renders differ", path.display());
+    // 128 is a multiple of the 4x2 packets; 125 leaves partial packets at the tiles' edges.
+    for size in [128, 125] {
+        assert!(
+            render_with(&scene, AccelKind::Bvh4, size, Kernel::Packet)
+                == render(&scene, AccelKind::Bvh4, size),
+            "{}: packet and single-ray kernels differ at {size}x{size}",
+            path.display()
+        );
+    }
     assert_eq!(
         render(&scene, AccelKind::Bvh2, 128),
         a,

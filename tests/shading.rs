@@ -29,9 +29,8 @@ use whitted::scene::{Camera, Material, Scene};
 fn with_renderer<R>(scene: &Scene, max_depth: u32, f: impl FnOnce(&Renderer) -> R) -> R {
     let accel = Accel::build(Prims::new(scene), AccelKind::None);
     let options = Options {
-        width: scene.camera.width,
-        height: scene.camera.height,
         max_depth,
+        ..Options::new(scene)
     };
     let renderer = Renderer::new(scene, &accel, options);
     f(&renderer)

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use whitted::accel::{Accel, AccelKind, Prims};
-use whitted::render::{Options, Renderer, film::Film, tiles};
+use whitted::render::{Kernel, Options, Renderer, film::Film, tiles};
 use whitted::scene::{self, Scene, check_resolution};
 
 use super::{BuildKind, build_options};
@@ -38,6 +38,9 @@ pub struct RenderArgs {
     /// Acceleration structure: none, grid, bvh2 or bvh4.
     #[arg(long, default_value = "bvh4")]
     accel: AccelKind,
+    /// Camera rays one at a time (single) or in packets of 8 (packet, BVH4 only; same image).
+    #[arg(long, default_value = "packet")]
+    kernel: Kernel,
     /// The BVH2 builder when `--accel bvh2`: sah or midpoint.
     #[arg(long, default_value = "sah")]
     build: BuildKind,
@@ -107,6 +110,7 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
         width,
         height,
         max_depth: args.max_depth,
+        kernel: args.kernel,
     };
     let renderer = Renderer::new(&scene, &accel, options);
     for w in &renderer.warnings {
@@ -118,13 +122,14 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
     film.write(&args.output, args.srgb)?;
     if !args.quiet {
         eprintln!(
-            "whitted: {}x{} in {:.3} s (load {:.3} s, build {:.3} s, accel {:?}, {} threads) -> {}",
+            "whitted: {}x{} in {:.3} s (load {:.3} s, build {:.3} s, accel {:?}, kernel {:?}, {} threads) -> {}",
             width,
             height,
             rendered.as_secs_f64(),
             loaded.as_secs_f64(),
             built.as_secs_f64(),
             args.accel,
+            args.kernel,
             pool.current_num_threads(),
             args.output.display()
         );

@@ -11,13 +11,39 @@ pub mod tiles;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::accel::{Accel, Prims};
+use crate::accel::bvh4::Bvh4;
+use crate::accel::bvh4::packet::PACKET;
+use crate::accel::policy::Closest;
+use crate::accel::{Accel, Hit, Prims};
+use crate::geometry::ray::Ray;
 use crate::scene::Scene;
 use camera::RayCamera;
 use env::{Background, CubeMap};
 use film::Film;
 use light::LightSample;
 use tiles::{TILE, Tile};
+
+/// How camera rays are traced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kernel {
+    /// One ray at a time.
+    Single,
+    /// Camera rays in packets of 8 (4x2 pixels) through the BVH4's packet kernel; other accelerators,
+    /// and every secondary ray, go one at a time. The image is identical to `Single`'s.
+    Packet,
+}
+
+impl std::str::FromStr for Kernel {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "single" => Ok(Kernel::Single),
+            "packet" => Ok(Kernel::Packet),
+            _ => Err(format!("unknown kernel \"{s}\": expected single or packet")),
+        }
+    }
+}
 
 /// What to render, beyond the scene itself.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -28,6 +54,8 @@ pub struct Options {
     pub height: u32,
     /// Most bounces after the primary hit; at the limit only the local colour is computed.
     pub max_depth: u32,
+    /// Single rays or packets for the camera rays.
+    pub kernel: Kernel,
 }
 
 impl Options {
@@ -37,6 +65,7 @@ impl Options {
             width: scene.camera.width,
             height: scene.camera.height,
             max_depth: 6,
+            kernel: Kernel::Packet,
         }
     }
 }
@@ -87,6 +116,35 @@ impl<'a> Renderer<'a> {
         self.trace(&ray, 0)
     }
 
+    /// Shades a tile whose camera rays are traced in packets of 4x2 pixels (pixels outside the image are
+    /// inactive lanes), then shaded one by one from their hits.
+    fn tile_packets(&self, bvh: &Bvh4, tile: Tile, buf: &mut [Vec3; (TILE * TILE) as usize]) {
+        const W: u32 = 4;
+        const H: u32 = (PACKET as u32) / W;
+        for y0 in (tile.y0..tile.y1).step_by(H as usize) {
+            for x0 in (tile.x0..tile.x1).step_by(W as usize) {
+                let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
+                let mut hits = [Hit::miss(f32::INFINITY); PACKET];
+                let mut active = 0u8;
+                for k in 0..PACKET as u32 {
+                    let (x, y) = (x0 + k % W, y0 + k / W);
+                    if x < tile.x1 && y < tile.y1 {
+                        rays[k as usize] = self.camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+                        active |= 1 << k;
+                    }
+                }
+                bvh.traverse_packet::<Closest>(&rays, active, 0.0, &mut hits);
+                for k in 0..PACKET as u32 {
+                    if active >> k & 1 == 1 {
+                        let (x, y) = (x0 + k % W, y0 + k / W);
+                        buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] =
+                            self.shade(&rays[k as usize], &hits[k as usize], 0);
+                    }
+                }
+            }
+        }
+    }
+
     /// Renders the frame on the current rayon pool.
     pub fn render(&self) -> Film {
         self.render_with(&|| {})
@@ -101,9 +159,14 @@ impl<'a> Renderer<'a> {
             .par_iter()
             .map(|&tile| {
                 let mut buf = [Vec3::ZERO; (TILE * TILE) as usize];
-                for y in tile.y0..tile.y1 {
-                    for x in tile.x0..tile.x1 {
-                        buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] = self.pixel(x, y);
+                match (self.options.kernel, self.accel) {
+                    (Kernel::Packet, Accel::Bvh4(bvh)) => self.tile_packets(bvh, tile, &mut buf),
+                    _ => {
+                        for y in tile.y0..tile.y1 {
+                            for x in tile.x0..tile.x1 {
+                                buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] = self.pixel(x, y);
+                            }
+                        }
                     }
                 }
                 on_tile();

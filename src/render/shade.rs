@@ -22,10 +22,17 @@ impl Renderer<'_> {
     /// The colour seen along `ray` (unit direction) after `depth` bounces.
     pub fn trace(&self, ray: &Ray, depth: u32) -> Vec3 {
         let mut hit = Hit::miss(f32::INFINITY);
-        if !self.accel.intersect(ray, 0.0, &mut hit) {
+        self.accel.intersect(ray, 0.0, &mut hit);
+        self.shade(ray, &hit, depth)
+    }
+
+    /// The colour of `ray` given its closest hit (found by a single-ray or a packet kernel): the
+    /// background for a miss, else local colour plus reflected and refracted light.
+    pub fn shade(&self, ray: &Ray, hit: &Hit, depth: u32) -> Vec3 {
+        if !hit.is_hit() {
             return self.background.sample(ray.dir);
         }
-        let surface = self.prims.surface(ray, &hit);
+        let surface = self.prims.surface(ray, hit);
         let m = &self.scene.materials[surface.material as usize];
         let (p, ng, ns, inside) = (surface.point, surface.geometric, surface.shading, surface.inside);
         let mut color = self.local(p, ng, ns, -ray.dir, m);

@@ -4,6 +4,7 @@
 //! so one 4-lane slab test answers all four at once.
 
 mod collapse;
+pub mod packet;
 mod traverse;
 pub mod tri4;
 
