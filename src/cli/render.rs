@@ -146,11 +146,12 @@ fn render_with_progress(renderer: &Renderer, width: u32, height: u32, quiet: boo
             .expect("valid template")
             .progress_chars("=> "),
     );
-    let start = Instant::now();
+    // Short frames never flash a bar: it is drawn from the first tile finished after this instant.
+    let show_from = Instant::now() + Duration::from_secs(1);
     let shown = AtomicBool::new(quiet);
     let film = renderer.render_with(&|| {
         bar.inc(1);
-        if !shown.load(Ordering::Relaxed) && start.elapsed() > Duration::from_secs(1) {
+        if !shown.load(Ordering::Relaxed) && Instant::now() >= show_from {
             shown.store(true, Ordering::Relaxed);
             bar.set_draw_target(ProgressDrawTarget::stderr());
         }
