@@ -113,3 +113,55 @@ fn cli_renders_the_default_scene() {
         "no temporary file left behind"
     );
 }
+
+/// More light samples than the packet path traces as packets (81 from a 9x9 quad light, one point
+/// light), glass and mirrors several bounces deep: packets and single rays still give the same image.
+#[test]
+fn packets_match_single_rays_with_many_light_samples_and_deep_bounces() {
+    use glam::Vec3;
+    use whitted::scene::{Camera, Material, QuadLight};
+
+    let mut s = Scene::new(Camera::new(
+        Vec3::new(0.0, 2.0, 8.0),
+        Vec3::ZERO,
+        Vec3::Y,
+        45.0,
+        64,
+        64,
+    ));
+    s.add_point_light(Vec3::new(-4.0, 6.0, 4.0), Vec3::splat(0.5));
+    s.area_lights.push(QuadLight {
+        corner: Vec3::new(-1.0, 5.0, -1.0),
+        edge_u: Vec3::X * 2.0,
+        edge_v: Vec3::Z * 2.0,
+        color: Vec3::ONE,
+        grid: 9,
+    });
+    let glass = s.add_material(Material {
+        ks: 0.2,
+        transmission: 0.9,
+        ior: 1.5,
+        ..Material::default()
+    });
+    let mirror = s.add_material(Material {
+        ks: 0.9,
+        ..Material::default()
+    });
+    let matte = s.add_material(Material::default());
+    s.add_sphere(Vec3::new(-1.0, 1.0, 0.0), 1.0, glass);
+    s.add_sphere(Vec3::new(1.5, 0.7, -0.5), 0.7, mirror);
+    s.add_box(Vec3::new(-3.0, 0.0, -3.0), Vec3::new(3.0, 2.5, -2.5), mirror);
+    s.add_triangle(
+        Vec3::new(-5.0, 0.0, 5.0),
+        Vec3::new(5.0, 0.0, 5.0),
+        Vec3::new(0.0, 0.0, -5.0),
+        matte,
+    );
+    for size in [64, 61] {
+        assert!(
+            render_with(&s, AccelKind::Bvh4, size, Kernel::Packet)
+                == render_with(&s, AccelKind::Bvh4, size, Kernel::Single),
+            "packet and single-ray kernels differ at {size}x{size}"
+        );
+    }
+}

@@ -8,6 +8,7 @@ pub mod bvh4;
 pub mod grid;
 pub mod policy;
 pub mod prims;
+pub mod stack;
 
 use std::str::FromStr;
 

@@ -5,17 +5,14 @@ pub mod env;
 pub mod film;
 pub mod light;
 pub mod optics;
+mod packets;
 pub mod shade;
 pub mod tiles;
 
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::accel::bvh4::Bvh4;
-use crate::accel::bvh4::packet::PACKET;
-use crate::accel::policy::Closest;
-use crate::accel::{Accel, Hit, Prims};
-use crate::geometry::ray::Ray;
+use crate::accel::{Accel, Prims};
 use crate::scene::Scene;
 use camera::RayCamera;
 use env::{Background, CubeMap};
@@ -28,8 +25,9 @@ use tiles::{TILE, Tile};
 pub enum Kernel {
     /// One ray at a time.
     Single,
-    /// Camera rays in packets of 8 (4x2 pixels) through the BVH4's packet kernel; other accelerators,
-    /// and every secondary ray, go one at a time. The image is identical to `Single`'s.
+    /// Camera rays in packets of 8 (4x2 pixels) through the BVH4's packet kernel, and their hits'
+    /// shadow rays in packets per light sample; other accelerators, and the reflected and refracted
+    /// rays, go one at a time. The image is identical to `Single`'s.
     Packet,
 }
 
@@ -114,35 +112,6 @@ impl<'a> Renderer<'a> {
     pub fn pixel(&self, x: u32, y: u32) -> Vec3 {
         let ray = self.camera.ray(x as f32 + 0.5, y as f32 + 0.5);
         self.trace(&ray, 0)
-    }
-
-    /// Shades a tile whose camera rays are traced in packets of 4x2 pixels (pixels outside the image are
-    /// inactive lanes), then shaded one by one from their hits.
-    fn tile_packets(&self, bvh: &Bvh4, tile: Tile, buf: &mut [Vec3; (TILE * TILE) as usize]) {
-        const W: u32 = 4;
-        const H: u32 = (PACKET as u32) / W;
-        for y0 in (tile.y0..tile.y1).step_by(H as usize) {
-            for x0 in (tile.x0..tile.x1).step_by(W as usize) {
-                let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
-                let mut hits = [Hit::miss(f32::INFINITY); PACKET];
-                let mut active = 0u8;
-                for k in 0..PACKET as u32 {
-                    let (x, y) = (x0 + k % W, y0 + k / W);
-                    if x < tile.x1 && y < tile.y1 {
-                        rays[k as usize] = self.camera.ray(x as f32 + 0.5, y as f32 + 0.5);
-                        active |= 1 << k;
-                    }
-                }
-                bvh.traverse_packet::<Closest>(&rays, active, 0.0, &mut hits);
-                for k in 0..PACKET as u32 {
-                    if active >> k & 1 == 1 {
-                        let (x, y) = (x0 + k % W, y0 + k / W);
-                        buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] =
-                            self.shade(&rays[k as usize], &hits[k as usize], 0);
-                    }
-                }
-            }
-        }
     }
 
     /// Renders the frame on the current rayon pool.

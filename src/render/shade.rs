@@ -10,13 +10,55 @@
 use glam::Vec3;
 
 use super::Renderer;
+use super::light::LightSample;
 use super::optics::{beer, reflect, refract, schlick};
-use crate::accel::Hit;
+use crate::accel::{Hit, Surface};
 use crate::geometry::ray::Ray;
 use crate::scene::Material;
 
 /// Offset of secondary and shadow ray origins along the geometric normal, in scene units.
 pub const EPSILON: f32 = 1e-4;
+
+/// A shadow ray toward one light sample.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadowRay {
+    /// From just off the surface toward the light (unit direction).
+    pub ray: Ray,
+    /// Distance to the light: anything hit before it casts the shadow.
+    pub distance: f32,
+    /// Cosine between the shading normal and the direction to the light.
+    pub n_dot_l: f32,
+}
+
+impl ShadowRay {
+    /// The shadow ray from `p` (geometric normal `ng`, shading normal `ns`) to `light`, or `None` when
+    /// the light is behind the shading normal (it then adds nothing, neither diffuse nor highlight). The
+    /// packet and single-ray paths both build their shadow rays here, so they trace the same rays.
+    #[inline]
+    pub fn new(p: Vec3, ng: Vec3, ns: Vec3, light: &LightSample) -> Option<Self> {
+        let l = (light.position - p).normalize();
+        let n_dot_l = ns.dot(l);
+        if n_dot_l.is_nan() || n_dot_l <= 0.0 {
+            return None;
+        }
+        let origin = p + ng * if ng.dot(l) >= 0.0 { EPSILON } else { -EPSILON };
+        Some(ShadowRay {
+            ray: Ray::new(origin, l),
+            distance: (light.position - origin).length(),
+            n_dot_l,
+        })
+    }
+}
+
+/// The rays a hit spawns: the refracted ray (with Fresnel's transmitted share) and the mirror ray
+/// (with Ks times Fresnel's reflected share), each when its weight is not zero.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Bounces {
+    /// Refracted ray and weight.
+    pub refracted: Option<(Ray, f32)>,
+    /// Reflected ray and weight.
+    pub reflected: Option<(Ray, f32)>,
+}
 
 impl Renderer<'_> {
     /// The colour seen along `ray` (unit direction) after `depth` bounces.
@@ -26,41 +68,80 @@ impl Renderer<'_> {
         self.shade(ray, &hit, depth)
     }
 
-    /// The colour of `ray` given its closest hit (found by a single-ray or a packet kernel): the
-    /// background for a miss, else local colour plus reflected and refracted light.
+    /// The colour of `ray` given its closest hit: the background for a miss, else
+    /// [`shade_surface`](Self::shade_surface) with shadow and secondary rays traced one by one.
     pub fn shade(&self, ray: &Ray, hit: &Hit, depth: u32) -> Vec3 {
         if !hit.is_hit() {
             return self.background.sample(ray.dir);
         }
         let surface = self.prims.surface(ray, hit);
-        let m = &self.scene.materials[surface.material as usize];
-        let (p, ng, ns, inside) = (surface.point, surface.geometric, surface.shading, surface.inside);
-        let mut color = self.local(p, ng, ns, -ray.dir, m);
+        let bounces = self.bounces(ray, &surface, depth);
+        self.shade_surface(
+            ray,
+            &surface,
+            &bounces,
+            &mut |_, shadow| self.accel.occluded(&shadow.ray, 0.0, shadow.distance),
+            &mut |_, r| self.trace(r, depth + 1),
+        )
+    }
 
-        if depth < self.options.max_depth {
-            // Fresnel splits light between the mirror and the refracted ray; opaque surfaces reflect Ks.
-            let mut kr = 1.0;
-            if m.transmission > 0.0 {
-                let (eta_i, eta_t) = if inside { (m.ior, 1.0) } else { (1.0, m.ior) };
-                let cos_i = (-ray.dir.dot(ns)).clamp(0.0, 1.0);
-                kr = schlick(cos_i, eta_i, eta_t);
-                if let Some(t) = refract(ray.dir, ns, eta_i / eta_t) {
-                    let weight = m.transmission * (1.0 - kr);
-                    if weight > 0.0 {
-                        let refracted = Ray::new(p - EPSILON * ng, t.normalize());
-                        color += weight * self.trace(&refracted, depth + 1);
-                    }
-                } else {
-                    kr = 1.0;
+    /// The refracted and reflected rays of `ray`'s hit at `surface`; none at the depth limit.
+    pub fn bounces(&self, ray: &Ray, surface: &Surface, depth: u32) -> Bounces {
+        let mut out = Bounces::default();
+        if depth >= self.options.max_depth {
+            return out;
+        }
+        let m = &self.scene.materials[surface.material as usize];
+        let (p, ng, ns) = (surface.point, surface.geometric, surface.shading);
+        // Fresnel splits light between the mirror and the refracted ray; opaque surfaces reflect Ks.
+        let mut kr = 1.0;
+        if m.transmission > 0.0 {
+            let (eta_i, eta_t) = if surface.inside {
+                (m.ior, 1.0)
+            } else {
+                (1.0, m.ior)
+            };
+            let cos_i = (-ray.dir.dot(ns)).clamp(0.0, 1.0);
+            kr = schlick(cos_i, eta_i, eta_t);
+            if let Some(t) = refract(ray.dir, ns, eta_i / eta_t) {
+                let weight = m.transmission * (1.0 - kr);
+                if weight > 0.0 {
+                    out.refracted = Some((Ray::new(p - EPSILON * ng, t.normalize()), weight));
                 }
-            }
-            let weight = m.ks * kr;
-            if weight > 0.0 {
-                let reflected = Ray::new(p + EPSILON * ng, reflect(ray.dir, ns).normalize());
-                color += weight * self.trace(&reflected, depth + 1);
+            } else {
+                kr = 1.0;
             }
         }
-        if inside && m.transmission > 0.0 {
+        let weight = m.ks * kr;
+        if weight > 0.0 {
+            out.reflected = Some((
+                Ray::new(p + EPSILON * ng, reflect(ray.dir, ns).normalize()),
+                weight,
+            ));
+        }
+        out
+    }
+
+    /// Local colour plus the light of `bounces` at `surface`, hit by `ray`. `occluded(i, shadow)` says
+    /// whether the shadow ray toward light sample `i` is blocked and `trace(i, ray)` what secondary ray
+    /// `i` (0 refracted, 1 reflected) sees: traced there and then, or looked up from packets traced beforehand.
+    pub fn shade_surface(
+        &self,
+        ray: &Ray,
+        surface: &Surface,
+        bounces: &Bounces,
+        occluded: &mut impl FnMut(usize, &ShadowRay) -> bool,
+        trace: &mut impl FnMut(usize, &Ray) -> Vec3,
+    ) -> Vec3 {
+        let m = &self.scene.materials[surface.material as usize];
+        let (p, ng, ns) = (surface.point, surface.geometric, surface.shading);
+        let mut color = self.local(p, ng, ns, -ray.dir, m, occluded);
+        for (i, bounce) in [bounces.refracted, bounces.reflected].iter().enumerate() {
+            if let Some((r, weight)) = bounce {
+                color += *weight * trace(i, r);
+            }
+        }
+        if surface.inside && m.transmission > 0.0 {
             // The ray crossed the object's interior from its entry point to here.
             color *= beer(m.diffuse, surface.t);
         }
@@ -68,23 +149,26 @@ impl Renderer<'_> {
     }
 
     /// Blinn-Phong local colour: Σ C_light (Kd·Cd·max(0, n·L) + Ks·Cs·max(0, n·h)^shine), h = |L + V|,
-    /// over the light samples that an any-hit shadow ray reaches.
-    fn local(&self, p: Vec3, ng: Vec3, ns: Vec3, v: Vec3, m: &Material) -> Vec3 {
+    /// over the light samples whose shadow ray is not blocked.
+    fn local(
+        &self,
+        p: Vec3,
+        ng: Vec3,
+        ns: Vec3,
+        v: Vec3,
+        m: &Material,
+        occluded: &mut impl FnMut(usize, &ShadowRay) -> bool,
+    ) -> Vec3 {
         let mut color = Vec3::ZERO;
-        for light in &self.lights {
-            let to_light = light.position - p;
-            let l = to_light.normalize();
-            let n_dot_l = ns.dot(l);
-            // A light behind the shading normal contributes nothing (no diffuse, no highlight).
-            if n_dot_l.is_nan() || n_dot_l <= 0.0 {
+        for (i, light) in self.lights.iter().enumerate() {
+            let Some(shadow) = ShadowRay::new(p, ng, ns, light) else {
+                continue;
+            };
+            if occluded(i, &shadow) {
                 continue;
             }
-            let origin = p + ng * if ng.dot(l) >= 0.0 { EPSILON } else { -EPSILON };
-            let distance = (light.position - origin).length();
-            if self.accel.occluded(&Ray::new(origin, l), 0.0, distance) {
-                continue;
-            }
-            let mut c = m.kd * n_dot_l * m.diffuse;
+            let l = shadow.ray.dir;
+            let mut c = m.kd * shadow.n_dot_l * m.diffuse;
             if m.ks > 0.0 {
                 let h = (l + v).normalize();
                 c += m.ks * h.dot(ns).max(0.0).powf(m.shininess) * m.specular;

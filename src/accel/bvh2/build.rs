@@ -28,9 +28,12 @@ pub const MAX_LEAF: usize = 8;
 const MIDPOINT_LEAF: usize = 4;
 /// Below this many primitives a subtree is built on the current thread.
 const PARALLEL_THRESHOLD: usize = 16 * 1024;
-/// Past this depth splits are by count (median), which bounds the depth by log2(n) more levels; the
-/// traversal stacks are sized from it.
-const MAX_SAH_DEPTH: usize = 64;
+/// Past this depth splits are by count (median), which bounds the depth by log2(n) more levels: a run of
+/// lopsided SAH splits, or midpoint splits of clustered centroids, cannot make the tree arbitrarily deep.
+const MAX_FREE_DEPTH: usize = 64;
+/// The deepest a built tree can be: [`MAX_FREE_DEPTH`] levels, then halvings of at most 2³² primitives.
+/// The traversal stacks are sized from it.
+pub const MAX_DEPTH: usize = MAX_FREE_DEPTH + 32;
 
 /// Per-primitive data the builders read: the box, its centre, and whether it is a triangle (leaves hold
 /// one kind only, so a BVH4 leaf of triangles is a block the SIMD kernel tests as a whole).
@@ -181,9 +184,10 @@ impl Ctx<'_> {
         let n = ids.len();
         let split = match self.builder {
             Builder::Midpoint if n <= MIDPOINT_LEAF => None,
+            Builder::Midpoint if depth >= MAX_FREE_DEPTH => Some(self.median(ids, &centroids)),
             Builder::Midpoint => Some(self.midpoint(ids, &centroids)),
             Builder::Sah { .. } if n == 1 => None,
-            Builder::Sah { .. } if depth >= MAX_SAH_DEPTH => {
+            Builder::Sah { .. } if depth >= MAX_FREE_DEPTH => {
                 (n > MAX_LEAF).then(|| self.median(ids, &centroids))
             }
             Builder::Sah { bins } => self.sah(ids, &bounds, &centroids, bins),

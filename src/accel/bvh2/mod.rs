@@ -8,10 +8,11 @@ use std::fmt;
 
 use super::policy::HitPolicy;
 use super::prims::{Hit, Prims};
+use super::stack::Stack;
 use crate::geometry::aabb::Aabb;
 use crate::geometry::ray::{CULL_MARGIN, Ray, safe_inverse};
 
-pub use build::{Builder, build};
+pub use build::{Builder, MAX_DEPTH, build};
 
 /// A node: a box and either two children (`count == 0`, children at `first` and `first + 1`) or a leaf
 /// of `count` primitives (`ids[first..first + count]`).
@@ -49,8 +50,8 @@ pub struct Bvh2<'a> {
     pub ids: Vec<u32>,
 }
 
-/// Deepest traversal stack: the builders cap the tree's depth well below this.
-pub const STACK: usize = 128;
+/// Traversal stack depth: one entry per level (the farther child) of a tree at most [`MAX_DEPTH`] deep.
+const STACK: usize = MAX_DEPTH;
 
 impl<'a> Bvh2<'a> {
     /// Builds the tree for scalar leaf tests.
@@ -77,8 +78,7 @@ impl<'a> Bvh2<'a> {
             return found;
         }
         let inv = safe_inverse(ray.dir);
-        let mut stack = [(0u32, 0f32); STACK];
-        let mut sp = 0;
+        let mut stack = Stack::<(u32, f32), STACK>::new();
         let mut node = &self.nodes[0];
         if node.bounds.ray_entry(ray.origin, inv, t_min, hit.t).is_none() {
             return found;
@@ -109,8 +109,7 @@ impl<'a> Bvh2<'a> {
                         } else {
                             (node.first + 1, node.first, ta)
                         };
-                        stack[sp] = (far, t_far);
-                        sp += 1;
+                        stack.push((far, t_far));
                         node = &self.nodes[near as usize];
                         continue;
                     }
@@ -127,11 +126,9 @@ impl<'a> Bvh2<'a> {
             }
             // Pop the next subtree that may still hold a closer hit.
             loop {
-                if sp == 0 {
+                let Some((i, t_enter)) = stack.pop() else {
                     return found;
-                }
-                sp -= 1;
-                let (i, t_enter) = stack[sp];
+                };
                 if t_enter <= hit.t * CULL_MARGIN {
                     node = &self.nodes[i as usize];
                     break;

@@ -26,6 +26,9 @@ pub const TRIANGLES: u32 = 1 << 30;
 pub const COUNT_BITS: u32 = 4;
 /// An unused child slot (its box is inverted, so no ray ever enters it).
 pub const EMPTY: ChildRef = u32::MAX;
+/// Traversal stack depth (single ray and packet): a node pushes at most four children and pops one, so
+/// three entries per level of a tree no deeper than the BVH2 it was collapsed from.
+const STACK: usize = 3 * bvh2::MAX_DEPTH + 1;
 /// The most primitives a BVH4 can index: what fits a leaf reference's start beside its count.
 pub const MAX_PRIMS: u32 = 1 << (30 - COUNT_BITS);
 

@@ -29,17 +29,22 @@
 
 use wide::f32x8;
 
-use super::{Bvh4, ChildRef, EMPTY, LEAF, Node4, TRIANGLES, leaf_parts};
+use super::{Bvh4, ChildRef, EMPTY, LEAF, Node4, STACK, TRIANGLES, leaf_parts};
 use crate::accel::policy::HitPolicy;
 use crate::accel::prims::Hit;
+use crate::accel::stack::Stack;
 use crate::geometry::ray::{CULL_MARGIN, Ray, SLAB_ROBUST, safe_inverse};
 
 /// Rays per packet: the lanes of one [`f32x8`].
 pub const PACKET: usize = 8;
 
-/// Traversal stack depth: as for the single-ray kernel, at most three net pushes per level of a tree the
-/// builders keep under 100 levels deep.
-const STACK: usize = 256;
+/// A stack entry: a child, the mask of the rays that entered it, and their entry distances.
+#[derive(Clone, Copy)]
+struct Entry {
+    node: ChildRef,
+    mask: u8,
+    entry: f32x8,
+}
 
 /// The bits of a ray mask, lowest (first ray) first.
 #[inline(always)]
@@ -190,12 +195,7 @@ impl Bvh4<'_> {
         let margin = f32x8::splat(CULL_MARGIN);
         // The rays' hit distances, kept in lanes beside `hits`.
         let mut t_hit = limits(hits);
-        // The stack, as three arrays (a struct of them gets built and then copied): node references, the
-        // mask of rays that entered each, and those rays' entry distances.
-        let mut nodes = [0 as ChildRef; STACK];
-        let mut masks = [0u8; STACK];
-        let mut entries = [f32x8::ZERO; STACK];
-        let mut sp = 0;
+        let mut stack = Stack::<Entry, STACK>::new();
         let (mut current, mut mask) = (self.root, live);
         loop {
             if current & LEAF != 0 {
@@ -213,7 +213,7 @@ impl Bvh4<'_> {
             } else {
                 let node = &self.nodes[current as usize];
                 let t_max = t_hit * margin;
-                let start = sp;
+                let start = stack.len();
                 let mut keys = [0f32; 4];
                 for c in 0..4 {
                     if node.child[c] == EMPTY {
@@ -222,39 +222,39 @@ impl Bvh4<'_> {
                     let (entry, entered) = p.slab8(node, c, lo, t_max);
                     let entered = entered & mask;
                     if entered != 0 {
-                        keys[sp - start] = entry.to_array()[entered.trailing_zeros() as usize];
-                        (nodes[sp], masks[sp], entries[sp]) = (node.child[c], entered as u8, entry);
-                        sp += 1;
+                        keys[stack.len() - start] = entry.to_array()[entered.trailing_zeros() as usize];
+                        stack.push(Entry {
+                            node: node.child[c],
+                            mask: entered as u8,
+                            entry,
+                        });
                     }
                 }
-                match sp - start {
+                match stack.len() - start {
                     0 => {}
                     // One child entered: straight down, its rays have just passed the test.
                     1 => {
-                        sp = start;
-                        (current, mask) = (nodes[sp], masks[sp] as u32);
+                        let e = stack.pop().expect("just pushed");
+                        (current, mask) = (e.node, e.mask as u32);
                         continue;
                     }
-                    n if !P::ANY => {
-                        sort_far_to_near(&mut keys[..n], start, &mut nodes, &mut masks, &mut entries)
-                    }
+                    n if !P::ANY => sort_far_to_near(&mut keys[..n], stack.above_mut(start)),
                     _ => {}
                 }
             }
             // Pop the next entry that some ray may still find a (closer) hit in.
             loop {
-                if sp == 0 {
+                let Some(e) = stack.pop() else {
                     return found as u8;
-                }
-                sp -= 1;
-                let m = masks[sp] as u32
+                };
+                let m = e.mask as u32
                     & if P::ANY {
                         live
                     } else {
-                        entries[sp].simd_le(t_hit * margin).to_bitmask()
+                        e.entry.simd_le(t_hit * margin).to_bitmask()
                     };
                 if m != 0 {
-                    (current, mask) = (nodes[sp], m);
+                    (current, mask) = (e.node, m);
                     break;
                 }
             }
@@ -262,24 +262,15 @@ impl Bvh4<'_> {
     }
 }
 
-/// Orders the entries pushed from `start` on (2 to 4, with their sort `keys`) far to near, so that the
-/// nearest is popped first (insertion sort: at most six compares).
+/// Orders the entries one node pushed (2 to 4, with their sort `keys`) far to near, so that the nearest
+/// is popped first (insertion sort: at most six compares).
 #[inline(always)]
-fn sort_far_to_near(
-    keys: &mut [f32],
-    start: usize,
-    nodes: &mut [ChildRef; STACK],
-    masks: &mut [u8; STACK],
-    entries: &mut [f32x8; STACK],
-) {
+fn sort_far_to_near(keys: &mut [f32], run: &mut [Entry]) {
     for i in 1..keys.len() {
         let mut j = i;
         while j > 0 && keys[j - 1] < keys[j] {
             keys.swap(j - 1, j);
-            let (x, y) = (start + j - 1, start + j);
-            nodes.swap(x, y);
-            masks.swap(x, y);
-            entries.swap(x, y);
+            run.swap(j - 1, j);
             j -= 1;
         }
     }

@@ -8,13 +8,11 @@
 
 use wide::f32x4;
 
-use super::{Bvh4, ChildRef, EMPTY, LEAF, TRIANGLES, leaf_parts};
+use super::{Bvh4, ChildRef, EMPTY, LEAF, STACK, TRIANGLES, leaf_parts};
 use crate::accel::policy::HitPolicy;
 use crate::accel::prims::Hit;
+use crate::accel::stack::Stack;
 use crate::geometry::ray::{CULL_MARGIN, Ray, SLAB_ROBUST, safe_inverse};
-
-/// Traversal stack depth: three pushes per level of a tree the builders keep under 100 levels deep.
-const STACK: usize = 256;
 
 /// A ray prepared for 4-wide slab tests: origin and inverse direction splatted, and per axis a mask of
 /// "direction negative" that swaps which of min/max is the near plane.
@@ -103,8 +101,7 @@ impl Bvh4<'_> {
             return found;
         }
         let r = Prepared::new(ray);
-        let mut stack = [(0 as ChildRef, 0f32); STACK];
-        let mut sp = 0;
+        let mut stack = Stack::<(ChildRef, f32), STACK>::new();
         let mut current = self.root;
         loop {
             if current & LEAF != 0 {
@@ -122,25 +119,22 @@ impl Bvh4<'_> {
                     }
                     // Push the hit children, then order the pushed run far-to-near so the nearest is popped
                     // first (any-hit keeps the order it found).
-                    let start = sp;
+                    let start = stack.len();
                     while mask != 0 {
                         let k = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
-                        stack[sp] = (node.child[k], t[k]);
-                        sp += 1;
+                        stack.push((node.child[k], t[k]));
                     }
                     if !P::ANY {
-                        sort_far_to_near(&mut stack[start..sp]);
+                        sort_far_to_near(stack.above_mut(start));
                     }
                 }
             }
             // Pop the next subtree that may still hold a closer hit.
             loop {
-                if sp == 0 {
+                let Some((c, t_enter)) = stack.pop() else {
                     return found;
-                }
-                sp -= 1;
-                let (c, t_enter) = stack[sp];
+                };
                 if P::ANY || t_enter <= hit.t * CULL_MARGIN {
                     current = c;
                     break;

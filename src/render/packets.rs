@@ -1,0 +1,144 @@
+//! The packet integrator: a tile's camera rays traced eight at a time (4x2 pixels), and then, packet
+//! by packet, the shadow rays of their hits (one packet per light sample) and their reflected and
+//! refracted rays (one packet per kind), recursively to the depth limit. Rays that leave neighbouring
+//! pixels' hits toward one light, or off one smooth surface, stay about as coherent as the camera rays.
+//!
+//! Every lane is shaded by [`Renderer::shade_surface`] from the same rays the single-ray path traces
+//! ([`ShadowRay::new`], [`Renderer::bounces`]) and the packet kernel answers each ray as the single-ray
+//! kernel does, so the image is the single-ray path's, bit for bit.
+
+use glam::Vec3;
+
+use super::Renderer;
+use super::shade::{Bounces, ShadowRay};
+use super::tiles::{TILE, Tile};
+use crate::accel::bvh4::Bvh4;
+use crate::accel::bvh4::packet::PACKET;
+use crate::accel::policy::{AnyHit, Closest};
+use crate::accel::{Hit, Surface};
+use crate::geometry::ray::Ray;
+
+/// Light samples whose shadow rays are traced as packets (one bit each in a lane's mask); the shading
+/// asks for any more ray by ray.
+const PACKET_LIGHTS: usize = 64;
+
+/// Packets with fewer live rays than this go ray by ray: a packet's node tests cost about as much for
+/// one ray as for eight.
+const MIN_LANES: u32 = 2;
+
+/// Packet width in pixels (and `PACKET / W` rows).
+const W: u32 = 4;
+
+/// A packet's rays, the mask of lanes in use, and the colours they see.
+type Lanes<T> = [T; PACKET];
+
+impl Renderer<'_> {
+    /// Shades `tile` packet by packet (pixels outside the image are inactive lanes) into `buf`.
+    pub(super) fn tile_packets(&self, bvh: &Bvh4, tile: Tile, buf: &mut [Vec3; (TILE * TILE) as usize]) {
+        let h = PACKET as u32 / W;
+        for y0 in (tile.y0..tile.y1).step_by(h as usize) {
+            for x0 in (tile.x0..tile.x1).step_by(W as usize) {
+                let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
+                let mut active = 0u8;
+                for k in 0..PACKET as u32 {
+                    let (x, y) = (x0 + k % W, y0 + k / W);
+                    if x < tile.x1 && y < tile.y1 {
+                        rays[k as usize] = self.camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+                        active |= 1 << k;
+                    }
+                }
+                let colors = self.shade_packet(bvh, &rays, active, 0);
+                for k in lanes(active) {
+                    let (x, y) = (x0 + k as u32 % W, y0 + k as u32 / W);
+                    buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] = colors[k];
+                }
+            }
+        }
+    }
+
+    /// The colours seen along the rays of `rays` in `active` after `depth` bounces (others are zero):
+    /// the closest hits as a packet, then their shadow rays and secondary rays as packets.
+    fn shade_packet(&self, bvh: &Bvh4, rays: &Lanes<Ray>, active: u8, depth: u32) -> Lanes<Vec3> {
+        let mut hits = [Hit::miss(f32::INFINITY); PACKET];
+        let hit = bvh.traverse_packet::<Closest>(rays, active, 0.0, &mut hits);
+        let surfaces: Lanes<Option<Surface>> =
+            std::array::from_fn(|k| (hit >> k & 1 == 1).then(|| self.prims.surface(&rays[k], &hits[k])));
+        let blocked = self.shadow_packets(bvh, &surfaces);
+
+        let bounces: Lanes<Bounces> = std::array::from_fn(|k| match &surfaces[k] {
+            Some(s) => self.bounces(&rays[k], s, depth),
+            None => Bounces::default(),
+        });
+        // What the refracted (0) and reflected (1) rays see, each kind as one packet.
+        let seen: [Lanes<Vec3>; 2] = std::array::from_fn(|i| {
+            let mut next = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
+            let mut mask = 0u8;
+            for (k, b) in bounces.iter().enumerate() {
+                if let Some((r, _)) = [b.refracted, b.reflected][i] {
+                    (next[k], mask) = (r, mask | 1 << k);
+                }
+            }
+            self.trace_lanes(bvh, &next, mask, depth + 1)
+        });
+
+        let mut out = [Vec3::ZERO; PACKET];
+        for k in lanes(active) {
+            out[k] = match &surfaces[k] {
+                None => self.shade(&rays[k], &hits[k], depth),
+                Some(s) => self.shade_surface(
+                    &rays[k],
+                    s,
+                    &bounces[k],
+                    &mut |i, shadow| match i {
+                        0..PACKET_LIGHTS => blocked[k] >> i & 1 == 1,
+                        _ => self.accel.occluded(&shadow.ray, 0.0, shadow.distance),
+                    },
+                    &mut |i, _| seen[i][k],
+                ),
+            };
+        }
+        out
+    }
+
+    /// [`shade_packet`](Self::shade_packet), or ray by ray when too few lanes are live to share nodes.
+    fn trace_lanes(&self, bvh: &Bvh4, rays: &Lanes<Ray>, mask: u8, depth: u32) -> Lanes<Vec3> {
+        if mask.count_ones() >= MIN_LANES {
+            return self.shade_packet(bvh, rays, mask, depth);
+        }
+        let mut out = [Vec3::ZERO; PACKET];
+        for k in lanes(mask) {
+            out[k] = self.trace(&rays[k], depth);
+        }
+        out
+    }
+
+    /// Traces the shadow rays of a packet's hits, one packet per light sample (the first
+    /// [`PACKET_LIGHTS`]): bit `i` of lane `k` says whether light sample `i` is blocked from hit `k`.
+    fn shadow_packets(&self, bvh: &Bvh4, surfaces: &Lanes<Option<Surface>>) -> Lanes<u64> {
+        let mut blocked = [0u64; PACKET];
+        for (i, light) in self.lights.iter().enumerate().take(PACKET_LIGHTS) {
+            let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
+            let mut hits = [Hit::miss(0.0); PACKET];
+            let mut active = 0u8;
+            for (k, s) in surfaces.iter().enumerate() {
+                let Some(s) = s else { continue };
+                if let Some(shadow) = ShadowRay::new(s.point, s.geometric, s.shading, light) {
+                    (rays[k], hits[k]) = (shadow.ray, Hit::miss(shadow.distance));
+                    active |= 1 << k;
+                }
+            }
+            if active != 0 {
+                let hit = bvh.traverse_packet::<AnyHit>(&rays, active, 0.0, &mut hits);
+                for k in lanes(hit) {
+                    blocked[k] |= 1 << i;
+                }
+            }
+        }
+        blocked
+    }
+}
+
+/// The set bits of a lane mask, lowest first.
+fn lanes(mask: u8) -> impl Iterator<Item = usize> {
+    (0..PACKET).filter(move |k| mask >> k & 1 == 1)
+}
