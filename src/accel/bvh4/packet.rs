@@ -59,39 +59,50 @@ fn lanes(mut mask: u32) -> impl Iterator<Item = usize> {
 }
 
 /// Eight rays prepared for slab tests in structure of arrays: per axis the origins and (Embree's
-/// [`safe_inverse`]) inverse directions of all eight, and the mask of lanes whose direction is negative on
-/// that axis, which swaps that lane's near and far planes.
+/// [`safe_inverse`]) inverse directions of all eight. When the live rays' directions share their signs
+/// (camera and shadow rays nearly always do), `flip` says per axis whether the near plane is the max
+/// one, as in the single-ray kernel; otherwise (`mixed`) each lane orders its two planes by min/max.
 struct Packet {
     origin: [f32x8; 3],
     inv: [f32x8; 3],
-    negative: [f32x8; 3],
+    flip: [bool; 3],
+    mixed: bool,
 }
 
 impl Packet {
     #[inline(always)]
-    fn new(rays: &[Ray; PACKET]) -> Self {
+    fn new(rays: &[Ray; PACKET], live: u32) -> Self {
         let inv = soa(rays, &|r| safe_inverse(r.dir));
         let zero = f32x8::splat(0.0);
+        let negative = inv.map(|i| i.simd_lt(zero).to_bitmask() & live);
         Packet {
             origin: soa(rays, &|r| r.origin),
-            negative: inv.map(|i| i.simd_lt(zero)),
             inv,
+            flip: negative.map(|m| m != 0),
+            mixed: negative.iter().any(|&m| m != 0 && m != live),
         }
     }
 
     /// Child `c` of `n` against all eight rays: their entry distances and the mask of rays that enter it
-    /// within `[t_min, t_max]`. Lane by lane the single-ray kernel's slab test (Kay & Kajiya 1986), the
-    /// planes picked by the sign of each ray's own direction (a blend, not a min/max, so an inverted box
-    /// stays empty for every ray), with [`SLAB_ROBUST`] on the exit distance.
+    /// within `[t_min, t_max]`. Lane by lane the single-ray kernel's slab test (Kay & Kajiya 1986) with
+    /// [`SLAB_ROBUST`] on the exit distance. The min/max ordering of mixed packets gives the same planes
+    /// as ordering by sign for any box that is not inverted, and inverted (empty) slots are never tested.
     #[inline(always)]
     fn slab8(&self, n: &Node4, c: usize, t_min: f32x8, t_max: f32x8) -> (f32x8, u32) {
         let mut near = t_min;
         let mut far = f32x8::splat(f32::INFINITY);
         for axis in 0..3 {
-            let lo = (f32x8::splat(n.min[axis][c]) - self.origin[axis]) * self.inv[axis];
-            let hi = (f32x8::splat(n.max[axis][c]) - self.origin[axis]) * self.inv[axis];
-            near = near.fast_max(self.negative[axis].select(hi, lo));
-            far = far.fast_min(self.negative[axis].select(lo, hi));
+            let (a, b) = (n.min[axis][c], n.max[axis][c]);
+            let (a, b) = if self.flip[axis] { (b, a) } else { (a, b) };
+            let t0 = (f32x8::splat(a) - self.origin[axis]) * self.inv[axis];
+            let t1 = (f32x8::splat(b) - self.origin[axis]) * self.inv[axis];
+            if self.mixed {
+                near = near.fast_max(t0.fast_min(t1));
+                far = far.fast_min(t0.fast_max(t1));
+            } else {
+                near = near.fast_max(t0);
+                far = far.fast_min(t1);
+            }
         }
         let far = (far * f32x8::splat(SLAB_ROBUST)).fast_min(t_max);
         (near, near.simd_le(far).to_bitmask())
@@ -190,7 +201,7 @@ impl Bvh4<'_> {
         if live == 0 || self.root == EMPTY {
             return found as u8;
         }
-        let p = Packet::new(rays);
+        let p = Packet::new(rays, live);
         let lo = f32x8::splat(t_min);
         let margin = f32x8::splat(CULL_MARGIN);
         // The rays' hit distances, kept in lanes beside `hits`.

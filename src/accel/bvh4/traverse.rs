@@ -1,8 +1,8 @@
 //! The single-ray BVH4 kernel, written once for closest and any hit.
 //!
 //! Per node: one 4-lane slab test of the four children. The near and far planes of each axis are chosen
-//! by the sign of the ray's direction (a blend, not a min/max), which keeps the empty slots' inverted
-//! boxes empty. Closest-hit visits the hit children nearest first and skips stack entries whose entry
+//! once per ray by the sign of its direction (not a min/max per node), which keeps the empty slots'
+//! inverted boxes empty. Closest-hit visits the hit children nearest first and skips stack entries whose entry
 //! distance lies beyond the closest hit so far; any-hit visits them in any order and returns at the first
 //! hit.
 
@@ -14,44 +14,44 @@ use crate::accel::prims::Hit;
 use crate::accel::stack::Stack;
 use crate::geometry::ray::{CULL_MARGIN, Ray, SLAB_ROBUST, safe_inverse};
 
-/// A ray prepared for 4-wide slab tests: origin and inverse direction splatted, and per axis a mask of
-/// "direction negative" that swaps which of min/max is the near plane.
+/// A ray prepared for 4-wide slab tests: origin and inverse direction splatted, and per axis whether
+/// the direction is negative, which makes the max plane the near one (Embree's near/far plane offsets):
+/// the planes are picked once per ray, not blended per node.
 struct Prepared {
     origin: [f32x4; 3],
     inv: [f32x4; 3],
-    negative: [f32x4; 3],
+    flip: [bool; 3],
 }
 
 impl Prepared {
     #[inline(always)]
     fn new(ray: &Ray) -> Self {
         let inv = safe_inverse(ray.dir);
-        let zero = f32x4::splat(0.0);
-        let inv = [f32x4::splat(inv.x), f32x4::splat(inv.y), f32x4::splat(inv.z)];
         Prepared {
             origin: [
                 f32x4::splat(ray.origin.x),
                 f32x4::splat(ray.origin.y),
                 f32x4::splat(ray.origin.z),
             ],
-            negative: [inv[0].simd_lt(zero), inv[1].simd_lt(zero), inv[2].simd_lt(zero)],
-            inv,
+            inv: [f32x4::splat(inv.x), f32x4::splat(inv.y), f32x4::splat(inv.z)],
+            flip: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
         }
     }
 }
 
 impl Bvh4<'_> {
     /// The four children's entry distances and the mask of those the ray enters within `[t_min, t_max]`.
+    /// An empty slot's inverted box gives near = +∞ > far = −∞ whichever plane is near.
     #[inline(always)]
     fn slab4(&self, node: u32, r: &Prepared, t_min: f32, t_max: f32) -> (f32x4, u32) {
         let n = &self.nodes[node as usize];
         let mut near = f32x4::splat(t_min);
         let mut far = f32x4::splat(f32::INFINITY);
         for axis in 0..3 {
-            let lo = (f32x4::new(n.min[axis]) - r.origin[axis]) * r.inv[axis];
-            let hi = (f32x4::new(n.max[axis]) - r.origin[axis]) * r.inv[axis];
-            near = near.fast_max(r.negative[axis].select(hi, lo));
-            far = far.fast_min(r.negative[axis].select(lo, hi));
+            let (a, b) = (&n.min[axis], &n.max[axis]);
+            let (a, b) = if r.flip[axis] { (b, a) } else { (a, b) };
+            near = near.fast_max((f32x4::new(*a) - r.origin[axis]) * r.inv[axis]);
+            far = far.fast_min((f32x4::new(*b) - r.origin[axis]) * r.inv[axis]);
         }
         let far = (far * f32x4::splat(SLAB_ROBUST)).fast_min(f32x4::splat(t_max));
         (near, near.simd_le(far).to_bitmask())
