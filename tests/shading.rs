@@ -138,7 +138,7 @@ fn glass(cd: Vec3, ior: f32, ks: f32) -> Material {
         shininess: 1.0,
         transmission: 1.0,
         ior,
-        roughness: 0.0,
+        roughness: None,
     }
 }
 
@@ -546,7 +546,7 @@ fn total_internal_reflection_reflects() {
 
     for ks in [0.0f32, 0.5, 1.0] {
         let scene = block(ks);
-        let got = with_renderer(&scene, 3, |r| r.trace(&ray_at(45.0), 0));
+        let got = with_renderer(&scene, 3, |r| r.radiance(&ray_at(45.0)));
         let ks = ks as f64;
         let want = (ks * kr + ks * (1.0 - kr).powi(2)) * d(b);
         assert_close(got, want, &format!("45°, Ks = {ks}"));
@@ -568,7 +568,7 @@ fn total_internal_reflection_reflects() {
     let x_exit = -2.0 + 10.0 * sin_t / (1.0 - sin_t * sin_t).sqrt();
     assert!(x_exit < 0.5 && x_exit > -5.0);
     let kr = schlick(c, 1.0, 1.5);
-    let got = with_renderer(&scene, 3, |r| r.trace(&ray, 0));
+    let got = with_renderer(&scene, 3, |r| r.radiance(&ray));
     assert_close(got, (1.0 - kr).powi(2) * d(b), "10°, Ks = 0: two transmissions");
 }
 

@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use whitted::accel::{Accel, AccelKind, Prims};
+use whitted::render::progressive::Progressive;
 use whitted::render::{Kernel, Options, Renderer, film::Film, tiles};
 use whitted::scene::{self, Scene, check_resolution};
 
@@ -47,6 +48,31 @@ pub struct RenderArgs {
     /// SAH bins per axis (2 to 64).
     #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(2..=64))]
     bins: u32,
+    /// Samples per pixel (overrides the file's `spp`): 0 for one ray through each pixel centre, else
+    /// n x n jittered samples (rounded up to a square).
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Seed of every random number (the same seed gives the same image, on any number of threads).
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Lens aperture in pixels of the view plane (overrides the file's; 0 = pinhole).
+    #[arg(long, value_parser = non_negative)]
+    aperture: Option<f32>,
+    /// Focal distance as a ratio of the view-plane distance (overrides the file's).
+    #[arg(long, value_parser = positive)]
+    focal: Option<f32>,
+    /// Roughness of materials whose `f` line gives none (0 = perfect mirrors; the course used 0.3).
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    roughness: f32,
+    /// Progressive rendering: this many passes of one jittered sample per pixel, averaged.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    passes: u32,
+    /// With --passes: write the image every K passes, so the render can be watched converging.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    every: Option<u32>,
+    /// With --passes: also keep each written snapshot in this directory, numbered by pass.
+    #[arg(long)]
+    progressive_out: Option<PathBuf>,
     /// Encode the output with the sRGB curve (default: linear values, the course's convention).
     #[arg(long)]
     srgb: bool,
@@ -54,6 +80,38 @@ pub struct RenderArgs {
     #[arg(short, long)]
     quiet: bool,
 }
+
+fn number(s: &str) -> Result<f32, String> {
+    let v: f32 = s
+        .parse()
+        .map_err(|_| format!("expected a number, found \"{s}\""))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("expected a finite number, found {s}"))
+    }
+}
+
+fn non_negative(s: &str) -> Result<f32, String> {
+    let v = number(s)?;
+    if v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("expected a number of at least 0, found {s}"))
+    }
+}
+
+fn positive(s: &str) -> Result<f32, String> {
+    let v = number(s)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("expected a number above 0, found {s}"))
+    }
+}
+
+/// Set by Ctrl-C: the render stops at the next tile and keeps the last complete pass.
+static STOP: AtomicBool = AtomicBool::new(false);
 
 /// Loads the named scene, or the built-in one.
 pub fn load_scene(path: Option<&Path>) -> whitted::Result<Scene> {
@@ -90,13 +148,24 @@ pub fn thread_pool(threads: Option<usize>) -> whitted::Result<rayon::ThreadPool>
 /// Renders and writes the image.
 pub fn run(args: &RenderArgs) -> whitted::Result<()> {
     let start = Instant::now();
-    let scene = load_scene(args.scene.as_deref())?;
+    let mut scene = load_scene(args.scene.as_deref())?;
     for w in &scene.warnings {
         eprintln!("whitted: warning: {w}");
+    }
+    if let Some(a) = args.aperture {
+        scene.camera.aperture = a;
+    }
+    if let Some(f) = args.focal {
+        scene.camera.focal = f;
     }
     let (width, height) = resolution(&scene, args.width, args.height)?;
     let pool = thread_pool(args.threads)?;
     let loaded = start.elapsed();
+    if args.passes == 1 && (args.every.is_some() || args.progressive_out.is_some()) {
+        return Err(whitted::Error::msg(
+            "--every and --progressive-out need --passes 2 or more",
+        ));
+    }
 
     let build_start = Instant::now();
     let accel = Accel::build_with(
@@ -106,23 +175,65 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
     );
     let built = build_start.elapsed();
 
+    let spp = args.spp.unwrap_or(scene.spp);
+    if args.passes > 1 && spp > 1 {
+        eprintln!(
+            "whitted: warning: progressive passes take one jittered sample per pixel each; spp {spp} ignored"
+        );
+    }
     let options = Options {
         width,
         height,
         max_depth: args.max_depth,
         kernel: args.kernel,
+        spp: if args.passes > 1 { 1 } else { spp },
+        seed: args.seed,
+        roughness: args.roughness,
     };
     let renderer = Renderer::new(&scene, &accel, options);
     for w in &renderer.warnings {
         eprintln!("whitted: warning: {w}");
     }
+    // Ctrl-C stops at the next tile; what was written stays whole (files are renamed into place).
+    // Installing fails only if another handler is set, as in tests that call `run` twice: keep it.
+    let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::Relaxed));
+    if let Some(dir) = &args.progressive_out {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| whitted::Error::file(dir, format!("cannot create the directory: {e}")))?;
+    }
+
     let render_start = Instant::now();
-    let film = pool.install(|| render_with_progress(&renderer, width, height, args.quiet));
+    let mut mean = Progressive::new(width, height);
+    let every = args.every.unwrap_or(if args.progressive_out.is_some() {
+        1
+    } else {
+        u32::MAX
+    });
+    for pass in 1..=args.passes {
+        let label = (args.passes > 1).then(|| format!("pass {pass}/{}", args.passes));
+        let Some(film) = pool.install(|| render_with_progress(&renderer, pass, label, args.quiet)) else {
+            break;
+        };
+        mean.add(&film);
+        if pass % every == 0 && pass < args.passes {
+            write_snapshot(args, &mean)?;
+        }
+    }
     let rendered = render_start.elapsed();
-    film.write(&args.output, args.srgb)?;
+    if mean.passes() == 0 {
+        return Err(whitted::Error::msg(
+            "interrupted before the first pass was complete; nothing written",
+        ));
+    }
+    write_snapshot(args, &mean)?;
     if !args.quiet {
+        let passes = match args.passes {
+            1 => String::new(),
+            n if mean.passes() < n => format!(", interrupted after {} of {n} passes", mean.passes()),
+            n => format!(", {n} passes"),
+        };
         eprintln!(
-            "whitted: {}x{} in {:.3} s (load {:.3} s, build {:.3} s, accel {:?}, kernel {:?}, {} threads) -> {}",
+            "whitted: {}x{} in {:.3} s (load {:.3} s, build {:.3} s, accel {:?}, kernel {:?}, {} threads{passes}) -> {}",
             width,
             height,
             rendered.as_secs_f64(),
@@ -137,25 +248,46 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
     Ok(())
 }
 
-/// Renders with a progress bar on stderr that appears only if the frame takes more than a second.
-fn render_with_progress(renderer: &Renderer, width: u32, height: u32, quiet: bool) -> Film {
+/// Writes the mean so far to the output and, with `--progressive-out`, to a numbered copy there.
+fn write_snapshot(args: &RenderArgs, mean: &Progressive) -> whitted::Result<()> {
+    mean.film().write(&args.output, args.srgb)?;
+    if let Some(dir) = &args.progressive_out {
+        let stem = args.output.file_stem().unwrap_or_default().to_string_lossy();
+        let ext = args.output.extension().unwrap_or_default().to_string_lossy();
+        let name = format!("{stem}-{:04}.{ext}", mean.passes());
+        mean.film().write(&dir.join(name), args.srgb)?;
+    }
+    Ok(())
+}
+
+/// Renders pass `pass` with a progress bar on stderr that appears only if the pass takes more than a
+/// second; `None` if Ctrl-C stopped it.
+fn render_with_progress(renderer: &Renderer, pass: u32, label: Option<String>, quiet: bool) -> Option<Film> {
+    let (width, height) = renderer.size();
     let total = tiles::tiles(width, height).len() as u64;
     let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
     bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {percent}% tiles, eta {eta}")
+        ProgressStyle::with_template("{elapsed_precise} {msg} [{bar:40}] {percent}% tiles, eta {eta}")
             .expect("valid template")
             .progress_chars("=> "),
     );
+    if let Some(label) = label {
+        bar.set_message(label);
+    }
     // Short frames never flash a bar: it is drawn from the first tile finished after this instant.
     let show_from = Instant::now() + Duration::from_secs(1);
     let shown = AtomicBool::new(quiet);
-    let film = renderer.render_with(&|| {
-        bar.inc(1);
-        if !shown.load(Ordering::Relaxed) && Instant::now() >= show_from {
-            shown.store(true, Ordering::Relaxed);
-            bar.set_draw_target(ProgressDrawTarget::stderr());
-        }
-    });
+    let film = renderer.render_pass(
+        pass,
+        &|| {
+            bar.inc(1);
+            if !shown.load(Ordering::Relaxed) && Instant::now() >= show_from {
+                shown.store(true, Ordering::Relaxed);
+                bar.set_draw_target(ProgressDrawTarget::stderr());
+            }
+        },
+        &STOP,
+    );
     bar.finish_and_clear();
     film
 }

@@ -1,6 +1,6 @@
 //! Primary rays: the pinhole (and, with an aperture, thin-lens) camera of the `v` block.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use crate::geometry::ray::Ray;
 use crate::scene::Camera;
@@ -16,16 +16,26 @@ pub struct RayCamera {
     half: (f32, f32),
     width: u32,
     height: u32,
+    /// Radius of the thin lens (0: a pinhole).
+    lens_radius: f32,
+    /// Distance from the eye to the plane in focus, along the view direction.
+    focal_distance: f32,
 }
 
 impl RayCamera {
     /// Sets up the frame: `forward` toward `at`, `right = forward × up`, `up` re-orthogonalised; `angle`
     /// is the vertical field of view edge to edge, and pixels are square.
+    ///
+    /// The lens follows the course's camera: the view plane lies at `at` (distance d = |at − from|), the
+    /// aperture is the lens diameter in pixels of that plane (pixel size 2·d·tan(angle/2) / height), and
+    /// the plane in focus lies at `focal` · d.
     pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
         let forward = (camera.at - camera.from).normalize();
         let right = forward.cross(camera.up).normalize();
         let up = right.cross(forward);
         let tan = (camera.fov_y.to_radians() * 0.5).tan();
+        let view_distance = (camera.at - camera.from).length();
+        let pixel_size = 2.0 * view_distance * tan / height as f32;
         RayCamera {
             eye: camera.from,
             forward,
@@ -34,19 +44,44 @@ impl RayCamera {
             half: (tan * width as f32 / height as f32, tan),
             width,
             height,
+            lens_radius: 0.5 * camera.aperture * pixel_size,
+            focal_distance: camera.focal * view_distance,
         }
+    }
+
+    /// True when the camera has a lens (aperture above zero): its rays need lens samples.
+    pub fn has_lens(&self) -> bool {
+        self.lens_radius > 0.0
     }
 
     /// The ray through the image point `(x, y)` in pixels (`(0.5, 0.5)` is the centre of the top-left
     /// pixel), with a unit direction.
     #[inline]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
+        Ray::new(self.eye, self.through(x, y).normalize())
+    }
+
+    /// The thin-lens ray (Cook et al. 1984; Potmesil and Chakravarty 1981) through image point
+    /// `(x, y)` from lens point `lens` of the unit disc: it starts on the lens and passes through the
+    /// point of the focal plane that the pinhole ray through `(x, y)` meets, so whatever lies on that
+    /// plane is sharp and the rest blurs with its distance from it. A pinhole camera ignores `lens`.
+    #[inline]
+    pub fn lens_ray(&self, x: f32, y: f32, lens: Vec2) -> Ray {
+        if !self.has_lens() {
+            return self.ray(x, y);
+        }
+        let focus = self.eye + self.focal_distance * self.through(x, y);
+        let lens = self.lens_radius * lens;
+        let origin = self.eye + lens.x * self.right + lens.y * self.up;
+        Ray::new(origin, (focus - origin).normalize())
+    }
+
+    /// The direction through image point `(x, y)`, scaled to reach the plane one unit ahead.
+    #[inline]
+    fn through(&self, x: f32, y: f32) -> Vec3 {
         let sx = (2.0 * x / self.width as f32 - 1.0) * self.half.0;
         let sy = (1.0 - 2.0 * y / self.height as f32) * self.half.1;
-        Ray::new(
-            self.eye,
-            (self.forward + sx * self.right + sy * self.up).normalize(),
-        )
+        self.forward + sx * self.right + sy * self.up
     }
 }
 
@@ -74,6 +109,34 @@ mod tests {
             assert!((got.dir - want).length() < 1e-6);
             assert_eq!(got.origin, from);
         }
+    }
+
+    /// Every lens ray of an image point meets the pinhole ray through it on the focal plane; they start
+    /// within the lens radius (aperture 4 pixels: radius 2 pixels of the view plane).
+    #[test]
+    fn lens_rays_converge_on_the_focal_plane() {
+        let mut cam = Camera::new(Vec3::ZERO, Vec3::new(0.0, 0.0, -5.0), Vec3::Y, 60.0, 200, 100);
+        (cam.aperture, cam.focal) = (4.0, 1.5);
+        let rc = RayCamera::new(&cam, 200, 100);
+        assert!(rc.has_lens());
+        let pixel = 2.0 * 5.0 * 30f32.to_radians().tan() / 100.0;
+        for (x, y) in [(100.0, 50.0), (13.5, 80.25)] {
+            let pin = rc.ray(x, y);
+            // The focal plane is z = -7.5.
+            let focus = pin.at(7.5 / -pin.dir.z);
+            for lens in [Vec2::new(1.0, 0.0), Vec2::new(-0.3, 0.7), Vec2::ZERO] {
+                let r = rc.lens_ray(x, y, lens);
+                assert!((r.origin.length() - 2.0 * pixel * lens.length()).abs() < 1e-5);
+                let p = r.at((focus.z - r.origin.z) / r.dir.z);
+                assert!((p - focus).length() < 1e-4, "{p} vs {focus}");
+            }
+        }
+        cam.aperture = 0.0;
+        let pinhole = RayCamera::new(&cam, 200, 100);
+        assert_eq!(
+            pinhole.lens_ray(3.0, 4.0, Vec2::ONE).dir,
+            pinhole.ray(3.0, 4.0).dir
+        );
     }
 
     /// The image centre looks at `at`; the top edge is half the field of view above it.

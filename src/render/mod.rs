@@ -1,4 +1,10 @@
 //! Rendering: camera rays per tile, traced and shaded in parallel, into a linear film.
+//!
+//! At `spp` 0 each pixel gets one ray through its centre and quad lights their regular grids of point
+//! lights (the course's model). With `spp` = n² > 0 each pixel averages n × n jittered samples, each
+//! with its own lens point (depth of field), its paired, shuffled light point on every quad light (soft
+//! shadows) and its own random numbers for fuzzy reflections ([`sampler`]); progressive rendering
+//! averages passes of one such sample ([`progressive`]).
 
 pub mod camera;
 pub mod env;
@@ -6,18 +12,25 @@ pub mod film;
 pub mod light;
 pub mod optics;
 mod packets;
+pub mod progressive;
+pub mod sampler;
 pub mod shade;
 pub mod tiles;
 
-use glam::Vec3;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::accel::{Accel, Prims};
-use crate::scene::Scene;
+use crate::geometry::ray::Ray;
+use crate::scene::{QuadLight, Scene};
 use camera::RayCamera;
 use env::{Background, CubeMap};
 use film::Film;
-use light::LightSample;
+use light::{LightSample, Lights};
+use sampler::{PixelPattern, Sampler};
+use shade::PixelSample;
 use tiles::{TILE, Tile};
 
 /// How camera rays are traced.
@@ -54,16 +67,26 @@ pub struct Options {
     pub max_depth: u32,
     /// Single rays or packets for the camera rays.
     pub kernel: Kernel,
+    /// Samples per pixel: 0 for one ray through the centre; otherwise n × n jittered samples (a count
+    /// that is not a square is rounded up to the next one).
+    pub spp: u32,
+    /// Seed of every random number of the frame.
+    pub seed: u64,
+    /// Roughness of the materials whose `f` line does not give one.
+    pub roughness: f32,
 }
 
 impl Options {
-    /// The scene's own resolution, 6 bounces.
+    /// The scene's own resolution and samples per pixel, 6 bounces, seed 0, mirrors sharp.
     pub fn new(scene: &Scene) -> Self {
         Options {
             width: scene.camera.width,
             height: scene.camera.height,
             max_depth: 6,
             kernel: Kernel::Packet,
+            spp: scene.spp,
+            seed: 0,
+            roughness: 0.0,
         }
     }
 }
@@ -75,7 +98,14 @@ pub struct Renderer<'a> {
     accel: &'a Accel<'a>,
     background: Background,
     camera: RayCamera,
-    lights: Vec<LightSample>,
+    /// Point lights, and at spp 0 the quad lights' regular grids.
+    fixed_lights: Vec<LightSample>,
+    /// Quad lights sampled per pixel sample (none at spp 0).
+    quads: &'a [QuadLight],
+    /// Each material's roughness (the file's, or the options' default).
+    roughness: Vec<f32>,
+    /// Samples per pixel side: n × n per pixel, 0 for one ray through the centre.
+    side: u32,
     options: Options,
     /// What the renderer fell back on (a skybox that did not load, say), for the user to see.
     pub warnings: Vec<String>,
@@ -96,54 +126,159 @@ impl<'a> Renderer<'a> {
             // A missing directory was reported by the loader already.
             _ => Background::color(scene.background),
         };
+        let side = (options.spp as f64).sqrt().ceil() as u32;
+        if side * side != options.spp {
+            warnings.push(format!(
+                "{} samples per pixel is not a square: taking {side} x {side} = {}",
+                options.spp,
+                side * side
+            ));
+        }
+        if side == 0 && scene.camera.aperture > 0.0 {
+            warnings.push(
+                "depth of field needs samples (spp 1 or more): rendering through a pinhole".to_string(),
+            );
+        }
+        // At spp 0 the camera rays go through the pixel centres from the eye (a pinhole).
+        let camera = RayCamera::new(&scene.camera, options.width, options.height);
+        let (fixed_lights, quads) = if side == 0 {
+            (light::regular_samples(scene), &[][..])
+        } else {
+            (light::point_samples(scene), &scene.area_lights[..])
+        };
         Renderer {
             scene,
             prims: Prims::new(scene),
             accel,
             background,
-            camera: RayCamera::new(&scene.camera, options.width, options.height),
-            lights: light::regular_samples(scene),
+            camera,
+            fixed_lights,
+            quads,
+            roughness: scene
+                .materials
+                .iter()
+                .map(|m| m.roughness.unwrap_or(options.roughness))
+                .collect(),
+            side,
             options,
             warnings,
         }
     }
 
-    /// The colour of pixel `(x, y)`: one ray through its centre.
+    /// The image size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.options.width, self.options.height)
+    }
+
+    /// The light samples and random numbers of sample `s` of pixel `index` in pass `pass` (the light
+    /// point `uv` is the sample's paired point of the pattern; unused at spp 0).
+    fn pixel_sample(&self, pass: u32, index: u64, s: u32, uv: Vec2) -> PixelSample<'_> {
+        PixelSample {
+            lights: Lights::new(&self.fixed_lights, self.quads, uv),
+            rng: Sampler::new(self.options.seed, pass, index, 1 + s),
+        }
+    }
+
+    /// Sample `s` of pixel `(x, y)`: its camera ray and what it carries (the pattern must be the
+    /// pixel's, filled for this pass).
+    fn camera_sample(
+        &self,
+        x: u32,
+        y: u32,
+        pass: u32,
+        s: u32,
+        pattern: &PixelPattern,
+    ) -> (Ray, PixelSample<'_>) {
+        let index = u64::from(y) * u64::from(self.options.width) + u64::from(x);
+        let (x, y) = (x as f32, y as f32);
+        if self.side == 0 {
+            return (
+                self.camera.ray(x + 0.5, y + 0.5),
+                self.pixel_sample(pass, index, 0, Vec2::splat(0.5)),
+            );
+        }
+        let (p, uv) = (pattern.pixel[s as usize], pattern.light[s as usize]);
+        let mut sample = self.pixel_sample(pass, index, s, uv);
+        // The lens point is drawn even for a pinhole, so that a sample's random numbers do not depend
+        // on the camera.
+        let lens = sample.rng.in_unit_disc();
+        (self.camera.lens_ray(x + p.x, y + p.y, lens), sample)
+    }
+
+    /// Samples per pixel actually taken (at least one).
+    fn samples(&self) -> u32 {
+        (self.side * self.side).max(1)
+    }
+
+    /// Fills `pattern` for pixel `(x, y)` in pass `pass` (nothing to fill at spp 0).
+    fn fill_pattern(&self, x: u32, y: u32, pass: u32, pattern: &mut PixelPattern) {
+        if self.side > 0 {
+            let index = u64::from(y) * u64::from(self.options.width) + u64::from(x);
+            pattern.fill(self.side, self.options.seed, pass, index);
+        }
+    }
+
+    /// The colour of pixel `(x, y)` in pass `pass`: the mean of its samples, traced one by one.
+    fn pixel_in_pass(&self, x: u32, y: u32, pass: u32, pattern: &mut PixelPattern) -> Vec3 {
+        self.fill_pattern(x, y, pass, pattern);
+        let mut sum = Vec3::ZERO;
+        for s in 0..self.samples() {
+            let (ray, mut sample) = self.camera_sample(x, y, pass, s, pattern);
+            sum += self.trace(&ray, 0, &mut sample);
+        }
+        sum / self.samples() as f32
+    }
+
+    /// The colour of pixel `(x, y)` (first pass).
     pub fn pixel(&self, x: u32, y: u32) -> Vec3 {
-        let ray = self.camera.ray(x as f32 + 0.5, y as f32 + 0.5);
-        self.trace(&ray, 0)
+        self.pixel_in_pass(x, y, 1, &mut PixelPattern::default())
     }
 
-    /// Renders the frame on the current rayon pool.
+    /// What `ray` sees from the eye (depth 0), with the first sample's light points and random numbers
+    /// of pixel 0: for probing the shading with rays of one's own.
+    pub fn radiance(&self, ray: &Ray) -> Vec3 {
+        self.trace(ray, 0, &mut self.pixel_sample(1, 0, 0, Vec2::splat(0.5)))
+    }
+
+    /// Renders the frame (pass 1) on the current rayon pool.
     pub fn render(&self) -> Film {
-        self.render_with(&|| {})
+        let never = AtomicBool::new(false);
+        self.render_pass(1, &|| {}, &never).expect("not stopped")
     }
 
-    /// Renders the frame, calling `on_tile` after each tile (for a progress bar).
-    pub fn render_with(&self, on_tile: &(dyn Fn() + Sync)) -> Film {
+    /// Renders pass `pass` (from 1; each pass draws its own random numbers), calling `on_tile` after
+    /// each tile (for a progress bar). Returns `None`, promptly and with nothing half-done handed out,
+    /// once `stop` is set.
+    pub fn render_pass(&self, pass: u32, on_tile: &(dyn Fn() + Sync), stop: &AtomicBool) -> Option<Film> {
         let (w, h) = (self.options.width, self.options.height);
         let tiles = tiles::tiles(w, h);
-        // Each tile fills a fixed-size buffer on the stack; no allocation per pixel or per ray.
-        let done: Vec<(Tile, [Vec3; (TILE * TILE) as usize])> = tiles
+        // Each tile fills a fixed-size buffer on the stack; the sample pattern is allocated once per
+        // tile and reused, so nothing is allocated per pixel or per ray.
+        let done: Option<Vec<(Tile, [Vec3; (TILE * TILE) as usize])>> = tiles
             .par_iter()
             .map(|&tile| {
+                if stop.load(Ordering::Relaxed) {
+                    return None;
+                }
                 let mut buf = [Vec3::ZERO; (TILE * TILE) as usize];
                 match (self.options.kernel, self.accel) {
-                    (Kernel::Packet, Accel::Bvh4(bvh)) => self.tile_packets(bvh, tile, &mut buf),
+                    (Kernel::Packet, Accel::Bvh4(bvh)) => self.tile_packets(bvh, tile, pass, &mut buf),
                     _ => {
+                        let mut pattern = PixelPattern::default();
                         for y in tile.y0..tile.y1 {
                             for x in tile.x0..tile.x1 {
-                                buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] = self.pixel(x, y);
+                                buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] =
+                                    self.pixel_in_pass(x, y, pass, &mut pattern);
                             }
                         }
                     }
                 }
                 on_tile();
-                (tile, buf)
+                Some((tile, buf))
             })
             .collect();
         let mut film = Film::new(w, h);
-        for (tile, buf) in &done {
+        for (tile, buf) in &done? {
             for y in tile.y0..tile.y1 {
                 let row = (y * w) as usize;
                 let src = ((y - tile.y0) * TILE) as usize;
@@ -152,6 +287,6 @@ impl<'a> Renderer<'a> {
                     .copy_from_slice(&buf[src..src + n]);
             }
         }
-        film
+        Some(film)
     }
 }

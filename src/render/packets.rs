@@ -7,10 +7,11 @@
 //! ([`ShadowRay::new`], [`Renderer::bounces`]) and the packet kernel answers each ray as the single-ray
 //! kernel does, so the image is the single-ray path's, bit for bit.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::Renderer;
-use super::shade::{Bounces, ShadowRay};
+use super::sampler::PixelPattern;
+use super::shade::{Bounces, PixelSample, ShadowRay};
 use super::tiles::{TILE, Tile};
 use crate::accel::bvh4::Bvh4;
 use crate::accel::bvh4::packet::PACKET;
@@ -33,44 +34,79 @@ const W: u32 = 4;
 type Lanes<T> = [T; PACKET];
 
 impl Renderer<'_> {
-    /// Shades `tile` packet by packet (pixels outside the image are inactive lanes) into `buf`.
-    pub(super) fn tile_packets(&self, bvh: &Bvh4, tile: Tile, buf: &mut [Vec3; (TILE * TILE) as usize]) {
+    /// Shades `tile` for pass `pass`, packet by packet (pixels outside the image are inactive lanes),
+    /// into `buf`: sample `s` of eight pixels at a time, each lane with its pixel's own pattern and
+    /// random numbers, summed per pixel in sample order as the single-ray path sums them.
+    pub(super) fn tile_packets(
+        &self,
+        bvh: &Bvh4,
+        tile: Tile,
+        pass: u32,
+        buf: &mut [Vec3; (TILE * TILE) as usize],
+    ) {
         let h = PACKET as u32 / W;
+        let mut patterns: Lanes<PixelPattern> = Default::default();
         for y0 in (tile.y0..tile.y1).step_by(h as usize) {
             for x0 in (tile.x0..tile.x1).step_by(W as usize) {
-                let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
+                let pixel = |k: usize| (x0 + k as u32 % W, y0 + k as u32 / W);
                 let mut active = 0u8;
-                for k in 0..PACKET as u32 {
-                    let (x, y) = (x0 + k % W, y0 + k / W);
+                for (k, pattern) in patterns.iter_mut().enumerate() {
+                    let (x, y) = pixel(k);
                     if x < tile.x1 && y < tile.y1 {
-                        rays[k as usize] = self.camera.ray(x as f32 + 0.5, y as f32 + 0.5);
+                        self.fill_pattern(x, y, pass, pattern);
                         active |= 1 << k;
                     }
                 }
-                let colors = self.shade_packet(bvh, &rays, active, 0);
+                let mut sums = [Vec3::ZERO; PACKET];
+                for s in 0..self.samples() {
+                    let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
+                    let mut samples: Lanes<PixelSample> = std::array::from_fn(|k| {
+                        let (x, y) = pixel(k);
+                        if active >> k & 1 == 0 {
+                            return self.pixel_sample(pass, 0, 0, Vec2::ZERO);
+                        }
+                        let (ray, sample) = self.camera_sample(x, y, pass, s, &patterns[k]);
+                        rays[k] = ray;
+                        sample
+                    });
+                    let colors = self.shade_packet(bvh, &rays, active, 0, &mut samples);
+                    for k in lanes(active) {
+                        sums[k] += colors[k];
+                    }
+                }
                 for k in lanes(active) {
-                    let (x, y) = (x0 + k as u32 % W, y0 + k as u32 / W);
-                    buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] = colors[k];
+                    let (x, y) = pixel(k);
+                    buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] = sums[k] / self.samples() as f32;
                 }
             }
         }
     }
 
     /// The colours seen along the rays of `rays` in `active` after `depth` bounces (others are zero):
-    /// the closest hits as a packet, then their shadow rays and secondary rays as packets.
-    fn shade_packet(&self, bvh: &Bvh4, rays: &Lanes<Ray>, active: u8, depth: u32) -> Lanes<Vec3> {
+    /// the closest hits as a packet, then their shadow rays and secondary rays as packets. Each lane
+    /// draws its random numbers from its own sample, in the order the single-ray path draws them (its
+    /// bounce here, then its refracted ray's tree, then its reflected ray's).
+    fn shade_packet(
+        &self,
+        bvh: &Bvh4,
+        rays: &Lanes<Ray>,
+        active: u8,
+        depth: u32,
+        samples: &mut Lanes<PixelSample>,
+    ) -> Lanes<Vec3> {
         let mut hits = [Hit::miss(f32::INFINITY); PACKET];
         let hit = bvh.traverse_packet::<Closest>(rays, active, 0.0, &mut hits);
         let surfaces: Lanes<Option<Surface>> =
             std::array::from_fn(|k| (hit >> k & 1 == 1).then(|| self.prims.surface(&rays[k], &hits[k])));
-        let blocked = self.shadow_packets(bvh, &surfaces);
+        let blocked = self.shadow_packets(bvh, &surfaces, samples);
 
         let bounces: Lanes<Bounces> = std::array::from_fn(|k| match &surfaces[k] {
-            Some(s) => self.bounces(&rays[k], s, depth),
+            Some(s) => self.bounces(&rays[k], s, depth, &mut samples[k].rng),
             None => Bounces::default(),
         });
         // What the refracted (0) and reflected (1) rays see, each kind as one packet.
-        let seen: [Lanes<Vec3>; 2] = std::array::from_fn(|i| {
+        let mut seen = [[Vec3::ZERO; PACKET]; 2];
+        for (i, seen) in seen.iter_mut().enumerate() {
             let mut next = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
             let mut mask = 0u8;
             for (k, b) in bounces.iter().enumerate() {
@@ -78,17 +114,18 @@ impl Renderer<'_> {
                     (next[k], mask) = (r, mask | 1 << k);
                 }
             }
-            self.trace_lanes(bvh, &next, mask, depth + 1)
-        });
+            *seen = self.trace_lanes(bvh, &next, mask, depth + 1, samples);
+        }
 
         let mut out = [Vec3::ZERO; PACKET];
         for k in lanes(active) {
             out[k] = match &surfaces[k] {
-                None => self.shade(&rays[k], &hits[k], depth),
+                None => self.shade(&rays[k], &hits[k], depth, &mut samples[k]),
                 Some(s) => self.shade_surface(
                     &rays[k],
                     s,
                     &bounces[k],
+                    &samples[k].lights,
                     &mut |i, shadow| match i {
                         0..PACKET_LIGHTS => blocked[k] >> i & 1 == 1,
                         _ => self.accel.occluded(&shadow.ray, 0.0, shadow.distance),
@@ -103,7 +140,14 @@ impl Renderer<'_> {
     /// [`shade_packet`](Self::shade_packet), or ray by ray when too few lanes are live to share nodes
     /// or their directions point into different octants (rays off a curved mirror, say), which share
     /// few nodes: measured 2.5% faster on `dragon.p3f` than packets of any such rays.
-    fn trace_lanes(&self, bvh: &Bvh4, rays: &Lanes<Ray>, mask: u8, depth: u32) -> Lanes<Vec3> {
+    fn trace_lanes(
+        &self,
+        bvh: &Bvh4,
+        rays: &Lanes<Ray>,
+        mask: u8,
+        depth: u32,
+        samples: &mut Lanes<PixelSample>,
+    ) -> Lanes<Vec3> {
         let octant = |r: &Ray| r.dir.cmplt(Vec3::ZERO).bitmask();
         let mut live = lanes(mask);
         let coherent = match live.next() {
@@ -111,26 +155,34 @@ impl Renderer<'_> {
             None => true,
         };
         if coherent && mask.count_ones() >= MIN_LANES {
-            return self.shade_packet(bvh, rays, mask, depth);
+            return self.shade_packet(bvh, rays, mask, depth, samples);
         }
         let mut out = [Vec3::ZERO; PACKET];
         for k in lanes(mask) {
-            out[k] = self.trace(&rays[k], depth);
+            out[k] = self.trace(&rays[k], depth, &mut samples[k]);
         }
         out
     }
 
     /// Traces the shadow rays of a packet's hits, one packet per light sample (the first
-    /// [`PACKET_LIGHTS`]): bit `i` of lane `k` says whether light sample `i` is blocked from hit `k`.
-    fn shadow_packets(&self, bvh: &Bvh4, surfaces: &Lanes<Option<Surface>>) -> Lanes<u64> {
+    /// [`PACKET_LIGHTS`]; lane `k` aims at its own sample's light `i`): bit `i` of lane `k` says whether
+    /// light sample `i` is blocked from hit `k`.
+    fn shadow_packets(
+        &self,
+        bvh: &Bvh4,
+        surfaces: &Lanes<Option<Surface>>,
+        samples: &Lanes<PixelSample>,
+    ) -> Lanes<u64> {
         let mut blocked = [0u64; PACKET];
-        for (i, light) in self.lights.iter().enumerate().take(PACKET_LIGHTS) {
+        let count = samples[0].lights.len().min(PACKET_LIGHTS);
+        for i in 0..count {
             let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
             let mut hits = [Hit::miss(0.0); PACKET];
             let mut active = 0u8;
             for (k, s) in surfaces.iter().enumerate() {
                 let Some(s) = s else { continue };
-                if let Some(shadow) = ShadowRay::new(s.point, s.geometric, s.shading, light) {
+                let light = samples[k].lights.get(i);
+                if let Some(shadow) = ShadowRay::new(s.point, s.geometric, s.shading, &light) {
                     (rays[k], hits[k]) = (shadow.ray, Hit::miss(shadow.distance));
                     active |= 1 << k;
                 }

@@ -10,8 +10,9 @@
 use glam::Vec3;
 
 use super::Renderer;
-use super::light::LightSample;
+use super::light::{LightSample, Lights};
 use super::optics::{beer, reflect, refract, schlick};
+use super::sampler::Sampler;
 use crate::accel::{Hit, Surface};
 use crate::geometry::ray::Ray;
 use crate::scene::Material;
@@ -60,33 +61,47 @@ pub struct Bounces {
     pub reflected: Option<(Ray, f32)>,
 }
 
+/// What one pixel sample carries down its ray tree: the light samples it sees and its random numbers.
+pub struct PixelSample<'a> {
+    /// Light samples (the quad lights at this sample's paired point).
+    pub lights: Lights<'a>,
+    /// This sample's generator (fuzzy reflections).
+    pub rng: Sampler,
+}
+
+/// Tries at drawing a fuzzy reflection above the surface before settling for the mirror direction.
+const FUZZ_TRIES: u32 = 16;
+
 impl Renderer<'_> {
     /// The colour seen along `ray` (unit direction) after `depth` bounces.
-    pub fn trace(&self, ray: &Ray, depth: u32) -> Vec3 {
+    pub fn trace(&self, ray: &Ray, depth: u32, sample: &mut PixelSample) -> Vec3 {
         let mut hit = Hit::miss(f32::INFINITY);
         self.accel.intersect(ray, 0.0, &mut hit);
-        self.shade(ray, &hit, depth)
+        self.shade(ray, &hit, depth, sample)
     }
 
     /// The colour of `ray` given its closest hit: the background for a miss, else
     /// [`shade_surface`](Self::shade_surface) with shadow and secondary rays traced one by one.
-    pub fn shade(&self, ray: &Ray, hit: &Hit, depth: u32) -> Vec3 {
+    pub fn shade(&self, ray: &Ray, hit: &Hit, depth: u32, sample: &mut PixelSample) -> Vec3 {
         if !hit.is_hit() {
             return self.background.sample(ray.dir);
         }
         let surface = self.prims.surface(ray, hit);
-        let bounces = self.bounces(ray, &surface, depth);
+        let bounces = self.bounces(ray, &surface, depth, &mut sample.rng);
+        let lights = sample.lights;
         self.shade_surface(
             ray,
             &surface,
             &bounces,
+            &lights,
             &mut |_, shadow| self.accel.occluded(&shadow.ray, 0.0, shadow.distance),
-            &mut |_, r| self.trace(r, depth + 1),
+            &mut |_, r| self.trace(r, depth + 1, sample),
         )
     }
 
-    /// The refracted and reflected rays of `ray`'s hit at `surface`; none at the depth limit.
-    pub fn bounces(&self, ray: &Ray, surface: &Surface, depth: u32) -> Bounces {
+    /// The refracted and reflected rays of `ray`'s hit at `surface`; none at the depth limit. A rough
+    /// material's mirror direction is perturbed within a ball of its roughness, drawn from `rng`.
+    pub fn bounces(&self, ray: &Ray, surface: &Surface, depth: u32, rng: &mut Sampler) -> Bounces {
         let mut out = Bounces::default();
         if depth >= self.options.max_depth {
             return out;
@@ -114,10 +129,14 @@ impl Renderer<'_> {
         }
         let weight = m.ks * kr;
         if weight > 0.0 {
-            out.reflected = Some((
-                Ray::new(p + EPSILON * ng, reflect(ray.dir, ns).normalize()),
-                weight,
-            ));
+            let mirror = reflect(ray.dir, ns).normalize();
+            let roughness = self.roughness[surface.material as usize];
+            let dir = if roughness > 0.0 {
+                fuzz(mirror, ng, roughness, rng)
+            } else {
+                mirror
+            };
+            out.reflected = Some((Ray::new(p + EPSILON * ng, dir), weight));
         }
         out
     }
@@ -130,12 +149,12 @@ impl Renderer<'_> {
         ray: &Ray,
         surface: &Surface,
         bounces: &Bounces,
+        lights: &Lights,
         occluded: &mut impl FnMut(usize, &ShadowRay) -> bool,
         trace: &mut impl FnMut(usize, &Ray) -> Vec3,
     ) -> Vec3 {
         let m = &self.scene.materials[surface.material as usize];
-        let (p, ng, ns) = (surface.point, surface.geometric, surface.shading);
-        let mut color = self.local(p, ng, ns, -ray.dir, m, occluded);
+        let mut color = self.local(surface, -ray.dir, m, lights, occluded);
         for (i, bounce) in [bounces.refracted, bounces.reflected].iter().enumerate() {
             if let Some((r, weight)) = bounce {
                 color += *weight * trace(i, r);
@@ -152,16 +171,16 @@ impl Renderer<'_> {
     /// over the light samples whose shadow ray is not blocked.
     fn local(
         &self,
-        p: Vec3,
-        ng: Vec3,
-        ns: Vec3,
+        surface: &Surface,
         v: Vec3,
         m: &Material,
+        lights: &Lights,
         occluded: &mut impl FnMut(usize, &ShadowRay) -> bool,
     ) -> Vec3 {
+        let (p, ng, ns) = (surface.point, surface.geometric, surface.shading);
         let mut color = Vec3::ZERO;
-        for (i, light) in self.lights.iter().enumerate() {
-            let Some(shadow) = ShadowRay::new(p, ng, ns, light) else {
+        for (i, light) in lights.iter().enumerate() {
+            let Some(shadow) = ShadowRay::new(p, ng, ns, &light) else {
                 continue;
             };
             if occluded(i, &shadow) {
@@ -176,5 +195,46 @@ impl Renderer<'_> {
             color += light.color * c;
         }
         color
+    }
+}
+
+/// A fuzzy reflection (the course's glossy mirror; Shirley's "fuzz"): the mirror direction plus a
+/// uniform point of the ball of radius `roughness`, normalised, drawn again while it points below the
+/// surface (geometric normal `ng`, turned toward the viewer); after [`FUZZ_TRIES`] the mirror itself.
+fn fuzz(mirror: Vec3, ng: Vec3, roughness: f32, rng: &mut Sampler) -> Vec3 {
+    for _ in 0..FUZZ_TRIES {
+        let d = (mirror + roughness * rng.in_unit_ball()).normalize();
+        if d.dot(ng) > 0.0 {
+            return d;
+        }
+    }
+    mirror
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Fuzzy reflections stay above the surface, within asin(roughness) of the mirror direction, and
+    /// centred on it; roughness 0 is the mirror itself.
+    #[test]
+    fn fuzzy_reflections() {
+        let ng = Vec3::Y;
+        let mirror = Vec3::new(1.0, 1.0, 0.0).normalize();
+        let mut rng = Sampler::new(1, 1, 0, 1);
+        let mut mean = Vec3::ZERO;
+        for _ in 0..20_000 {
+            let d = fuzz(mirror, ng, 0.3, &mut rng);
+            assert!(d.dot(ng) > 0.0);
+            assert!((d.length() - 1.0).abs() < 1e-5);
+            assert!(d.angle_between(mirror) <= 0.3f32.asin() + 1e-4);
+            mean += d;
+        }
+        assert!(mean.normalize().angle_between(mirror) < 0.01);
+        // Grazing: a wide fuzz still never goes below the surface.
+        let grazing = Vec3::new(1.0, 0.02, 0.0).normalize();
+        for _ in 0..2_000 {
+            assert!(fuzz(grazing, ng, 0.9, &mut rng).dot(ng) > 0.0);
+        }
     }
 }

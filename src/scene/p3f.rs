@@ -360,7 +360,7 @@ impl Parser {
             // Opaque materials often carry `ior 0` (SPD and course files): it means nothing.
             ior = 1.0;
         }
-        let roughness = if n == 12 { v(11) } else { 0.0 };
+        let roughness = (n == 12).then(|| v(11));
         let id = self.scene.add_material(Material {
             diffuse,
             kd,

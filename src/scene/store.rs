@@ -168,8 +168,9 @@ pub struct Material {
     pub transmission: f32,
     /// Index of refraction (meaningful when `transmission > 0`).
     pub ior: f32,
-    /// Spread of reflections: 0 is a perfect mirror.
-    pub roughness: f32,
+    /// Spread of reflections (the radius of the ball the mirror direction is perturbed within): 0 is a
+    /// perfect mirror; `None` when the file does not say, and the renderer's default applies.
+    pub roughness: Option<f32>,
 }
 
 impl Default for Material {
@@ -183,7 +184,7 @@ impl Default for Material {
             shininess: 1.0,
             transmission: 0.0,
             ior: 1.0,
-            roughness: 0.0,
+            roughness: None,
         }
     }
 }

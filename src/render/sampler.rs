@@ -1,0 +1,202 @@
+//! Random numbers for distribution ray tracing (Cook, Porter, Carpenter 1984, "Distributed Ray
+//! Tracing"), reproducible bit for bit: every generator is seeded from `(seed, pass, pixel, stream)`,
+//! never from a thread or from the order tiles are scheduled in, so the image does not depend on either.
+//!
+//! Per pixel, [`PixelPattern`] holds the n × n jittered sub-pixel positions (one uniform point in each
+//! cell of an n × n grid over the pixel) and a second, independent jittered n × n set on the unit square
+//! for the area lights, shuffled (Fisher–Yates) so that sub-pixel cell `s` is paired with a random light
+//! cell rather than the same corner of the light every time (the course's decorrelation). Per sample,
+//! a [`Sampler`] supplies the lens point and the fuzzy-reflection perturbations.
+
+use glam::{Vec2, Vec3};
+use rand_xoshiro::Xoshiro256PlusPlus;
+use rand_xoshiro::rand_core::{Rng, SeedableRng};
+
+/// Streams of one pixel: the pattern, then each sample's own.
+const PATTERN_STREAM: u32 = 0;
+
+/// A generator of uniform numbers for one pixel sample (or one pixel's pattern).
+pub struct Sampler {
+    rng: Xoshiro256PlusPlus,
+}
+
+/// SplitMix64's finaliser (Steele, Lea, Flood 2014): a bijective mix, so distinct keys give distinct
+/// seeds and neighbouring pixels get unrelated streams.
+fn mix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+impl Sampler {
+    /// The generator of `stream` (0: the pattern, `1 + s`: sample `s`) of pixel `pixel` (row-major
+    /// index) in pass `pass` of a render seeded with `seed`.
+    pub fn new(seed: u64, pass: u32, pixel: u64, stream: u32) -> Self {
+        let key = mix(mix(mix(seed) ^ pixel) ^ (u64::from(pass) << 32 | u64::from(stream)));
+        Sampler {
+            rng: Xoshiro256PlusPlus::seed_from_u64(key),
+        }
+    }
+
+    /// Uniform in [0, 1): the top 24 bits of the next output, so every value is exact in `f32`.
+    #[inline]
+    pub fn uniform(&mut self) -> f32 {
+        (self.rng.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+    }
+
+    /// Two uniform numbers.
+    #[inline]
+    pub fn next2(&mut self) -> Vec2 {
+        let x = self.uniform();
+        Vec2::new(x, self.uniform())
+    }
+
+    /// A uniform point in the unit disc, by Shirley and Chiu's concentric map ("A Low Distortion Map
+    /// Between Disk and Square", 1997): two numbers per point, no rejection.
+    pub fn in_unit_disc(&mut self) -> Vec2 {
+        let p = self.next2() * 2.0 - 1.0;
+        if p == Vec2::ZERO {
+            return p;
+        }
+        let (r, theta) = if p.x.abs() > p.y.abs() {
+            (p.x, std::f32::consts::FRAC_PI_4 * (p.y / p.x))
+        } else {
+            (
+                p.y,
+                std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (p.x / p.y),
+            )
+        };
+        r * Vec2::new(theta.cos(), theta.sin())
+    }
+
+    /// A uniform point in the unit ball (rejection from the cube: 52% of draws accepted).
+    pub fn in_unit_ball(&mut self) -> Vec3 {
+        loop {
+            let p = Vec3::new(self.uniform(), self.uniform(), self.uniform()) * 2.0 - 1.0;
+            if p.length_squared() <= 1.0 {
+                return p;
+            }
+        }
+    }
+
+    /// An index in `0..n` (n > 0), by Lemire's multiply-shift (bias below 2⁻³² · n).
+    fn below(&mut self, n: usize) -> usize {
+        ((u64::from(self.rng.next_u32()) * n as u64) >> 32) as usize
+    }
+}
+
+/// One pixel's n × n jittered sub-pixel positions and their shuffled jittered light samples. The
+/// buffers are reused from pixel to pixel (no allocation per pixel once grown).
+#[derive(Clone, Debug, Default)]
+pub struct PixelPattern {
+    /// Offsets in the pixel, in [0, 1)², cell by cell, row by row.
+    pub pixel: Vec<Vec2>,
+    /// Light samples in [0, 1)², paired with `pixel` by index.
+    pub light: Vec<Vec2>,
+}
+
+impl PixelPattern {
+    /// Fills the pattern of pixel `pixel` for `n × n` samples (`n ≥ 1`).
+    pub fn fill(&mut self, n: u32, seed: u64, pass: u32, pixel: u64) {
+        let mut rng = Sampler::new(seed, pass, pixel, PATTERN_STREAM);
+        let cells = (n * n) as usize;
+        let inv = 1.0 / n as f32;
+        let jittered = |out: &mut Vec<Vec2>, rng: &mut Sampler| {
+            out.clear();
+            for j in 0..n {
+                for i in 0..n {
+                    let cell = Vec2::new(i as f32, j as f32);
+                    out.push((cell + rng.next2()) * inv);
+                }
+            }
+        };
+        jittered(&mut self.pixel, &mut rng);
+        jittered(&mut self.light, &mut rng);
+        // Fisher–Yates (Durstenfeld's in-place form).
+        for i in (1..cells).rev() {
+            let j = rng.below(i + 1);
+            self.light.swap(i, j);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn streams_are_reproducible_and_distinct() {
+        let a: Vec<f32> = (0..8)
+            .map(|_| 0.0)
+            .scan(Sampler::new(7, 1, 42, 3), |s, _| Some(s.uniform()))
+            .collect();
+        let b: Vec<f32> = (0..8)
+            .map(|_| 0.0)
+            .scan(Sampler::new(7, 1, 42, 3), |s, _| Some(s.uniform()))
+            .collect();
+        assert_eq!(a, b);
+        for (seed, pass, pixel, stream) in [(8, 1, 42, 3), (7, 2, 42, 3), (7, 1, 43, 3), (7, 1, 42, 4)] {
+            let mut s = Sampler::new(seed, pass, pixel, stream);
+            let c: Vec<f32> = (0..8).map(|_| s.uniform()).collect();
+            assert_ne!(a, c, "{seed} {pass} {pixel} {stream}");
+        }
+        assert!(a.iter().all(|&x| (0.0..1.0).contains(&x)));
+    }
+
+    /// One sample in every cell, for the pixel and for the light; the light set is a permutation of a
+    /// jittered set, not paired cell for cell with the pixel's.
+    #[test]
+    fn jittered_and_shuffled() {
+        let mut p = PixelPattern::default();
+        for n in [1u32, 2, 3, 7] {
+            let mut paired_same_cell = 0;
+            for pixel in 0..50u64 {
+                p.fill(n, 1, 1, pixel);
+                for set in [&p.pixel, &p.light] {
+                    let mut seen = vec![false; (n * n) as usize];
+                    for s in set {
+                        assert!(s.min_element() >= 0.0 && s.max_element() < 1.0);
+                        let c = (s.y * n as f32) as u32 * n + (s.x * n as f32) as u32;
+                        assert!(!seen[c as usize], "two samples in cell {c}");
+                        seen[c as usize] = true;
+                    }
+                }
+                let cell = |s: Vec2| ((s.x * n as f32) as u32, (s.y * n as f32) as u32);
+                paired_same_cell += p
+                    .pixel
+                    .iter()
+                    .zip(&p.light)
+                    .filter(|(a, b)| cell(**a) == cell(**b))
+                    .count();
+            }
+            if n >= 3 {
+                // A random pairing puts about 1 of n² pairs in the same cell: far from all of them.
+                assert!(
+                    paired_same_cell < 50 * (n * n) as usize / 2,
+                    "n {n}: {paired_same_cell}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn disc_and_ball_are_uniform() {
+        let mut s = Sampler::new(3, 1, 0, 1);
+        let n = 200_000;
+        let (mut inner_disc, mut inner_ball) = (0, 0);
+        let mut mean = Vec3::ZERO;
+        for _ in 0..n {
+            let d = s.in_unit_disc();
+            assert!(d.length() <= 1.0 + 1e-6);
+            inner_disc += (d.length() < 0.5) as u32;
+            let b = s.in_unit_ball();
+            assert!(b.length() <= 1.0);
+            inner_ball += (b.length() < 0.5) as u32;
+            mean += b;
+        }
+        // Area within radius 1/2: a quarter of the disc; volume: an eighth of the ball.
+        assert!((inner_disc as f32 / n as f32 - 0.25).abs() < 0.005);
+        assert!((inner_ball as f32 / n as f32 - 0.125).abs() < 0.005);
+        assert!((mean / n as f32).length() < 0.01);
+    }
+}
