@@ -1,6 +1,7 @@
 //! Kernel throughput on the dragon workload (`shared/bench/dragon-workload.md`), one thread, in Mrays/s
 //! through criterion's throughput: primary rays (closest hit), shadow rays (any hit, and closest hit on
-//! the same rays for comparison) and diffuse bounces (closest hit, incoherent), for every accelerator,
+//! the same rays for comparison, and both on the blocked ones alone) and diffuse bounces (closest hit,
+//! incoherent), for every accelerator,
 //! and for the BVH4's packet kernel (8 consecutive rays a packet). Brute force runs on an evenly spaced
 //! sample of each set. The workload's primary-hit count and Σt, and every structure's hit counts, are
 //! checked first: a wrong benchmark measures nothing.
@@ -169,6 +170,28 @@ fn kernels(c: &mut Criterion) {
         g.throughput(Throughput::Elements(w.diffuse.len() as u64));
         g.bench_function(format!("{name}/diffuse"), |b| {
             b.iter(|| closest(accel, black_box(&w.diffuse)))
+        });
+    }
+    // The shadow rays that something blocks (6.4% on the full dragon): where any hit can stop early
+    // and closest hit cannot. On the unblocked rest both must prove the whole segment empty.
+    let blocked: Vec<(Ray, f32)> = w
+        .shadow
+        .iter()
+        .filter(|(r, t)| accels[0].1.occluded(r, 0.0, *t))
+        .copied()
+        .collect();
+    eprintln!(
+        "{} of the {} shadow rays are blocked",
+        blocked.len(),
+        w.shadow.len()
+    );
+    for (name, accel) in &accels[..2] {
+        g.throughput(Throughput::Elements(blocked.len() as u64));
+        g.bench_function(format!("{name}/blocked-any"), |b| {
+            b.iter(|| any(accel, black_box(&blocked)))
+        });
+        g.bench_function(format!("{name}/blocked-closest"), |b| {
+            b.iter(|| closest_within(accel, black_box(&blocked)))
         });
     }
     for (set, p, any) in [
