@@ -5,18 +5,14 @@
 //! `cargo bench --bench build`; `WHITTED_BENCH_QUICK=1` for a smoke run; `WHITTED_BENCH_SCENE` to point
 //! at another scene.
 
-use std::path::PathBuf;
-use std::time::Duration;
+mod common;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use whitted::accel::bvh2::Builder;
 use whitted::accel::{Accel, AccelKind, BuildOptions, Prims};
 
 fn build(c: &mut Criterion) {
-    let path = std::env::var("WHITTED_BENCH_SCENE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|_| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/dragon_full.p3f"));
-    let scene = whitted::scene::load(&path).expect("the bench scene loads");
+    let scene = whitted::scene::load(&common::scene_path()).expect("the bench scene loads");
     let prims = Prims::new(&scene);
     let sah = Builder::Sah { bins: 12 };
     let structures = [
@@ -25,14 +21,7 @@ fn build(c: &mut Criterion) {
         ("bvh4", AccelKind::Bvh4, sah),
         ("grid", AccelKind::Grid, sah),
     ];
-    let mut g = c.benchmark_group("build");
-    if std::env::var_os("WHITTED_BENCH_QUICK").is_some() {
-        g.sample_size(10)
-            .warm_up_time(Duration::from_millis(100))
-            .measurement_time(Duration::from_millis(500));
-    } else {
-        g.sample_size(10).measurement_time(Duration::from_secs(8));
-    }
+    let mut g = common::group(c, "build", 8);
     let all = std::thread::available_parallelism().map_or(1, |n| n.get());
     for threads in [1, all] {
         let pool = rayon::ThreadPoolBuilder::new()

@@ -9,11 +9,11 @@
 //! `cargo bench --bench kernels`; `WHITTED_BENCH_QUICK=1` for a smoke run; `WHITTED_BENCH_SCENE` to
 //! point at another scene (default `scenes/dragon_full.p3f`).
 
-use std::hint::black_box;
-use std::path::PathBuf;
-use std::time::Duration;
+mod common;
 
-use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
+use std::hint::black_box;
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use whitted::accel::bvh2::Builder;
 use whitted::accel::bvh4::Bvh4;
 use whitted::accel::bvh4::packet::PACKET;
@@ -85,22 +85,8 @@ fn sample<T: Copy>(v: &[T]) -> Vec<T> {
     v.iter().step_by(step).take(BRUTE_SAMPLE).copied().collect()
 }
 
-fn group<'a>(c: &'a mut Criterion, name: &str) -> BenchmarkGroup<'a, criterion::measurement::WallTime> {
-    let mut g = c.benchmark_group(name);
-    if std::env::var_os("WHITTED_BENCH_QUICK").is_some() {
-        g.sample_size(10)
-            .warm_up_time(Duration::from_millis(100))
-            .measurement_time(Duration::from_millis(500));
-    } else {
-        g.sample_size(10).measurement_time(Duration::from_secs(4));
-    }
-    g
-}
-
 fn kernels(c: &mut Criterion) {
-    let path = std::env::var("WHITTED_BENCH_SCENE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|_| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/dragon_full.p3f"));
+    let path = common::scene_path();
     let scene = whitted::scene::load(&path).expect("the bench scene loads");
     let prims = Prims::new(&scene);
     let with = |kind, builder| Accel::build_with(prims, kind, BuildOptions { builder, bins: 12 });
@@ -154,7 +140,7 @@ fn kernels(c: &mut Criterion) {
     assert_eq!(packet_hits::<true>(bvh4, &shadow_packets), hits_shadow);
     assert_eq!(packet_hits::<false>(bvh4, &diffuse_packets), hits_diffuse);
 
-    let mut g = group(c, "dragon");
+    let mut g = common::group(c, "dragon", 4);
     for (name, accel) in &accels {
         g.throughput(Throughput::Elements(w.primary.len() as u64));
         g.bench_function(format!("{name}/primary"), |b| {
@@ -220,7 +206,7 @@ fn kernels(c: &mut Criterion) {
             "{name} vs brute force"
         );
     }
-    let mut g = group(c, "dragon-sample");
+    let mut g = common::group(c, "dragon-sample", 4);
     g.throughput(Throughput::Elements(primary.len() as u64));
     g.bench_function("brute/primary", |b| {
         b.iter(|| closest(&brute, black_box(&primary)))
