@@ -165,3 +165,46 @@ fn packets_match_single_rays_with_many_light_samples_and_deep_bounces() {
         );
     }
 }
+
+/// `whitted bench --json` prints the keys the README names, and counts the same rays with either kernel.
+#[test]
+fn cli_bench_json() {
+    let run = |kernel: &str| {
+        let out = common::whitted(&[
+            "bench",
+            "scenes/balls_low.p3f",
+            "--frames",
+            "2",
+            "--width",
+            "40",
+            "--kernel",
+            kernel,
+            "--json",
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let packet = run("packet");
+    for key in [
+        "scene",
+        "width",
+        "height",
+        "frames",
+        "fps_median",
+        "frame_ms_median",
+        "rays_per_frame",
+        "mrays_per_s",
+        "threads",
+        "accel",
+        "kernel",
+    ] {
+        assert!(
+            packet.contains(&format!("\"{key}\": ")),
+            "{key} missing: {packet}"
+        );
+    }
+    let rays =
+        |s: &str| s[s.find("\"rays_per_frame\"").unwrap()..s.find("\"mrays_per_s\"").unwrap()].to_string();
+    assert!(rays(&packet).contains("\"primary\": 1600,"), "{packet}");
+    assert_eq!(rays(&packet), rays(&run("single")));
+}

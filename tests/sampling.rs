@@ -261,7 +261,7 @@ fn progressive_passes_converge() {
     let mut mean = Progressive::new(1, 1);
     let never = AtomicBool::new(false);
     for pass in 1..=256 {
-        mean.add(&r.render_pass(pass, &|| {}, &never).unwrap());
+        mean.add(&r.render_pass(pass, &|| {}, &never).unwrap().0);
     }
     let got = mean.film().pixels[0].x;
     // Each pass is 0 or cos θ (about 0.95): σ of the mean ≈ 0.5 / 16 ≈ 0.03.

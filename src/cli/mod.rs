@@ -1,6 +1,7 @@
 //! Command-line interface: parses arguments with clap and calls the library. Every failure is one line on
 //! stderr, `whitted: path:line:col: message`, and exit status 1; clap's usage errors exit with 2.
 
+mod bench;
 mod info;
 mod render;
 
@@ -22,6 +23,8 @@ enum Command {
     Info(info::InfoArgs),
     /// Render a scene (the built-in default scene if none is given) to an image.
     Render(render::RenderArgs),
+    /// Time frames of a scene (the course's dragon scene if none is given): fps, rays, Mrays/s.
+    Bench(bench::BenchArgs),
 }
 
 /// The BVH2 builder, as a command-line value.
@@ -48,6 +51,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render::run(&args),
+        Command::Bench(args) => bench::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -289,5 +289,5 @@ fn render_with_progress(renderer: &Renderer, pass: u32, label: Option<String>, q
         &STOP,
     );
     bar.finish_and_clear();
-    film
+    film.map(|(film, _)| film)
 }

@@ -30,7 +30,7 @@ use env::{Background, CubeMap};
 use film::Film;
 use light::{LightSample, Lights};
 use sampler::{PixelPattern, Sampler};
-use shade::PixelSample;
+use shade::{PixelSample, RayCounts};
 use tiles::{TILE, Tile};
 
 /// How camera rays are traced.
@@ -176,6 +176,7 @@ impl<'a> Renderer<'a> {
         PixelSample {
             lights: Lights::new(&self.fixed_lights, self.quads, uv),
             rng: Sampler::new(self.options.seed, pass, index, 1 + s),
+            rays: RayCounts::default(),
         }
     }
 
@@ -219,19 +220,30 @@ impl<'a> Renderer<'a> {
     }
 
     /// The colour of pixel `(x, y)` in pass `pass`: the mean of its samples, traced one by one.
-    fn pixel_in_pass(&self, x: u32, y: u32, pass: u32, pattern: &mut PixelPattern) -> Vec3 {
+    /// The colour of pixel `(x, y)` in pass `pass`: the mean of its samples, traced one by one; the rays
+    /// are counted into `rays`.
+    fn pixel_in_pass(
+        &self,
+        x: u32,
+        y: u32,
+        pass: u32,
+        pattern: &mut PixelPattern,
+        rays: &mut RayCounts,
+    ) -> Vec3 {
         self.fill_pattern(x, y, pass, pattern);
         let mut sum = Vec3::ZERO;
         for s in 0..self.samples() {
             let (ray, mut sample) = self.camera_sample(x, y, pass, s, pattern);
             sum += self.trace(&ray, 0, &mut sample);
+            sample.rays.primary += 1;
+            *rays += sample.rays;
         }
         sum / self.samples() as f32
     }
 
     /// The colour of pixel `(x, y)` (first pass).
     pub fn pixel(&self, x: u32, y: u32) -> Vec3 {
-        self.pixel_in_pass(x, y, 1, &mut PixelPattern::default())
+        self.pixel_in_pass(x, y, 1, &mut PixelPattern::default(), &mut RayCounts::default())
     }
 
     /// What `ray` sees from the eye (depth 0), with the first sample's light points and random numbers
@@ -243,42 +255,53 @@ impl<'a> Renderer<'a> {
     /// Renders the frame (pass 1) on the current rayon pool.
     pub fn render(&self) -> Film {
         let never = AtomicBool::new(false);
-        self.render_pass(1, &|| {}, &never).expect("not stopped")
+        self.render_pass(1, &|| {}, &never).expect("not stopped").0
     }
 
     /// Renders pass `pass` (from 1; each pass draws its own random numbers), calling `on_tile` after
-    /// each tile (for a progress bar). Returns `None`, promptly and with nothing half-done handed out,
-    /// once `stop` is set.
-    pub fn render_pass(&self, pass: u32, on_tile: &(dyn Fn() + Sync), stop: &AtomicBool) -> Option<Film> {
+    /// each tile (for a progress bar), and counts the rays it traced. Returns `None`, promptly and with
+    /// nothing half-done handed out, once `stop` is set.
+    pub fn render_pass(
+        &self,
+        pass: u32,
+        on_tile: &(dyn Fn() + Sync),
+        stop: &AtomicBool,
+    ) -> Option<(Film, RayCounts)> {
         let (w, h) = (self.options.width, self.options.height);
         let tiles = tiles::tiles(w, h);
         // Each tile fills a fixed-size buffer on the stack; the sample pattern is allocated once per
         // tile and reused, so nothing is allocated per pixel or per ray.
-        let done: Option<Vec<(Tile, [Vec3; (TILE * TILE) as usize])>> = tiles
+        type Done = (Tile, [Vec3; (TILE * TILE) as usize], RayCounts);
+        let done: Option<Vec<Done>> = tiles
             .par_iter()
             .map(|&tile| {
                 if stop.load(Ordering::Relaxed) {
                     return None;
                 }
                 let mut buf = [Vec3::ZERO; (TILE * TILE) as usize];
+                let mut rays = RayCounts::default();
                 match (self.options.kernel, self.accel) {
-                    (Kernel::Packet, Accel::Bvh4(bvh)) => self.tile_packets(bvh, tile, pass, &mut buf),
+                    (Kernel::Packet, Accel::Bvh4(bvh)) => {
+                        self.tile_packets(bvh, tile, pass, &mut buf, &mut rays)
+                    }
                     _ => {
                         let mut pattern = PixelPattern::default();
                         for y in tile.y0..tile.y1 {
                             for x in tile.x0..tile.x1 {
                                 buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] =
-                                    self.pixel_in_pass(x, y, pass, &mut pattern);
+                                    self.pixel_in_pass(x, y, pass, &mut pattern, &mut rays);
                             }
                         }
                     }
                 }
                 on_tile();
-                Some((tile, buf))
+                Some((tile, buf, rays))
             })
             .collect();
         let mut film = Film::new(w, h);
-        for (tile, buf) in &done? {
+        let mut rays = RayCounts::default();
+        for (tile, buf, tile_rays) in &done? {
+            rays += *tile_rays;
             for y in tile.y0..tile.y1 {
                 let row = (y * w) as usize;
                 let src = ((y - tile.y0) * TILE) as usize;
@@ -287,6 +310,6 @@ impl<'a> Renderer<'a> {
                     .copy_from_slice(&buf[src..src + n]);
             }
         }
-        Some(film)
+        Some((film, rays))
     }
 }

@@ -11,7 +11,7 @@ use glam::{Vec2, Vec3};
 
 use super::Renderer;
 use super::sampler::PixelPattern;
-use super::shade::{Bounces, PixelSample, ShadowRay};
+use super::shade::{Bounces, PixelSample, RayCounts, ShadowRay};
 use super::tiles::{TILE, Tile};
 use crate::accel::bvh4::Bvh4;
 use crate::accel::bvh4::packet::PACKET;
@@ -43,6 +43,7 @@ impl Renderer<'_> {
         tile: Tile,
         pass: u32,
         buf: &mut [Vec3; (TILE * TILE) as usize],
+        rays_traced: &mut RayCounts,
     ) {
         let h = PACKET as u32 / W;
         let mut patterns: Lanes<PixelPattern> = Default::default();
@@ -72,6 +73,8 @@ impl Renderer<'_> {
                     let colors = self.shade_packet(bvh, &rays, active, 0, &mut samples);
                     for k in lanes(active) {
                         sums[k] += colors[k];
+                        samples[k].rays.primary += 1;
+                        *rays_traced += samples[k].rays;
                     }
                 }
                 for k in lanes(active) {
@@ -104,6 +107,9 @@ impl Renderer<'_> {
             Some(s) => self.bounces(&rays[k], s, depth, &mut samples[k].rng),
             None => Bounces::default(),
         });
+        for (sample, b) in samples.iter_mut().zip(&bounces) {
+            sample.rays.add_bounces(b);
+        }
         // What the refracted (0) and reflected (1) rays see, each kind as one packet.
         let mut seen = [[Vec3::ZERO; PACKET]; 2];
         for (i, seen) in seen.iter_mut().enumerate() {
@@ -119,6 +125,7 @@ impl Renderer<'_> {
 
         let mut out = [Vec3::ZERO; PACKET];
         for k in lanes(active) {
+            let mut extra_shadows = 0;
             out[k] = match &surfaces[k] {
                 None => self.shade(&rays[k], &hits[k], depth, &mut samples[k]),
                 Some(s) => self.shade_surface(
@@ -128,11 +135,15 @@ impl Renderer<'_> {
                     &samples[k].lights,
                     &mut |i, shadow| match i {
                         0..PACKET_LIGHTS => blocked[k] >> i & 1 == 1,
-                        _ => self.accel.occluded(&shadow.ray, 0.0, shadow.distance),
+                        _ => {
+                            extra_shadows += 1;
+                            self.accel.occluded(&shadow.ray, 0.0, shadow.distance)
+                        }
                     },
                     &mut |i, _| seen[i][k],
                 ),
             };
+            samples[k].rays.shadow += extra_shadows;
         }
         out
     }
@@ -171,7 +182,7 @@ impl Renderer<'_> {
         &self,
         bvh: &Bvh4,
         surfaces: &Lanes<Option<Surface>>,
-        samples: &Lanes<PixelSample>,
+        samples: &mut Lanes<PixelSample>,
     ) -> Lanes<u64> {
         let mut blocked = [0u64; PACKET];
         let count = samples[0].lights.len().min(PACKET_LIGHTS);
@@ -188,6 +199,9 @@ impl Renderer<'_> {
                 }
             }
             if active != 0 {
+                for k in lanes(active) {
+                    samples[k].rays.shadow += 1;
+                }
                 let hit = bvh.traverse_packet::<AnyHit>(&rays, active, 0.0, &mut hits);
                 for k in lanes(hit) {
                     blocked[k] |= 1 << i;

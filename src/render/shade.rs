@@ -61,12 +61,50 @@ pub struct Bounces {
     pub reflected: Option<(Ray, f32)>,
 }
 
-/// What one pixel sample carries down its ray tree: the light samples it sees and its random numbers.
+/// Rays traced, by kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounts {
+    /// Camera rays.
+    pub primary: u64,
+    /// Shadow rays (any hit).
+    pub shadow: u64,
+    /// Mirror rays.
+    pub reflected: u64,
+    /// Refracted rays.
+    pub refracted: u64,
+}
+
+impl RayCounts {
+    /// All rays.
+    pub fn total(&self) -> u64 {
+        self.primary + self.shadow + self.reflected + self.refracted
+    }
+
+    /// Counts the secondary rays of `bounces`.
+    pub fn add_bounces(&mut self, bounces: &Bounces) {
+        self.refracted += bounces.refracted.is_some() as u64;
+        self.reflected += bounces.reflected.is_some() as u64;
+    }
+}
+
+impl std::ops::AddAssign for RayCounts {
+    fn add_assign(&mut self, o: RayCounts) {
+        self.primary += o.primary;
+        self.shadow += o.shadow;
+        self.reflected += o.reflected;
+        self.refracted += o.refracted;
+    }
+}
+
+/// What one pixel sample carries down its ray tree: the light samples it sees, its random numbers, and
+/// the count of rays it traced.
 pub struct PixelSample<'a> {
     /// Light samples (the quad lights at this sample's paired point).
     pub lights: Lights<'a>,
     /// This sample's generator (fuzzy reflections).
     pub rng: Sampler,
+    /// Rays traced for this sample so far.
+    pub rays: RayCounts,
 }
 
 /// Tries at drawing a fuzzy reflection above the surface before settling for the mirror direction.
@@ -88,15 +126,22 @@ impl Renderer<'_> {
         }
         let surface = self.prims.surface(ray, hit);
         let bounces = self.bounces(ray, &surface, depth, &mut sample.rng);
+        sample.rays.add_bounces(&bounces);
         let lights = sample.lights;
-        self.shade_surface(
+        let mut shadows = 0;
+        let color = self.shade_surface(
             ray,
             &surface,
             &bounces,
             &lights,
-            &mut |_, shadow| self.accel.occluded(&shadow.ray, 0.0, shadow.distance),
+            &mut |_, shadow| {
+                shadows += 1;
+                self.accel.occluded(&shadow.ray, 0.0, shadow.distance)
+            },
             &mut |_, r| self.trace(r, depth + 1, sample),
-        )
+        );
+        sample.rays.shadow += shadows;
+        color
     }
 
     /// The refracted and reflected rays of `ray`'s hit at `surface`; none at the depth limit. A rough
