@@ -6,11 +6,11 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use clap::Args;
-use whitted::accel::{Accel, AccelKind, Prims};
+use whitted::accel::{Accel, Prims};
 use whitted::render::shade::RayCounts;
-use whitted::render::{Kernel, Options, Renderer};
+use whitted::render::{Options, Renderer};
 
-use super::render::{load_scene, resolution, thread_pool};
+use super::render::{FrameArgs, load_scene, resolution, thread_pool};
 
 /// Arguments of `whitted bench`.
 #[derive(Args)]
@@ -20,24 +20,11 @@ pub struct BenchArgs {
     /// Frames timed (after one frame of warm-up).
     #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
-    /// Image width.
-    #[arg(long)]
-    width: Option<u32>,
-    /// Image height.
-    #[arg(long)]
-    height: Option<u32>,
+    #[command(flatten)]
+    frame: FrameArgs,
     /// Samples per pixel (default: the file's).
     #[arg(long)]
     spp: Option<u32>,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    threads: Option<usize>,
-    /// Acceleration structure.
-    #[arg(long, default_value = "bvh4")]
-    accel: AccelKind,
-    /// Camera rays one at a time or in packets.
-    #[arg(long, default_value = "packet")]
-    kernel: Kernel,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
@@ -58,13 +45,13 @@ fn default_scene() -> PathBuf {
 pub fn run(args: &BenchArgs) -> whitted::Result<()> {
     let path = args.scene.clone().unwrap_or_else(default_scene);
     let scene = load_scene(Some(&path))?;
-    let (width, height) = resolution(&scene, args.width, args.height)?;
-    let pool = thread_pool(args.threads)?;
-    let accel = pool.install(|| Accel::build(Prims::new(&scene), args.accel));
+    let (width, height) = resolution(&scene, args.frame.width, args.frame.height)?;
+    let pool = thread_pool(args.frame.threads)?;
+    let accel = pool.install(|| Accel::build(Prims::new(&scene), args.frame.accel));
     let options = Options {
         width,
         height,
-        kernel: args.kernel,
+        kernel: args.frame.kernel,
         spp: args.spp.unwrap_or(scene.spp),
         ..Options::new(&scene)
     };
@@ -102,8 +89,8 @@ pub fn run(args: &BenchArgs) -> whitted::Result<()> {
             "{}: {width}x{height}, {} frames on {threads} threads ({:?}, {:?} kernel)",
             path.display(),
             args.frames,
-            args.accel,
-            args.kernel
+            args.frame.accel,
+            args.frame.kernel
         );
         println!("frame: median {median:.1} ms (min {min:.1}, max {max:.1}), {fps:.2} fps");
         println!(
@@ -150,7 +137,7 @@ fn json(
         rays.reflected,
         rays.refracted,
         rays.total(),
-        format!("{:?}", args.accel).to_lowercase(),
-        format!("{:?}", args.kernel).to_lowercase(),
+        format!("{:?}", args.frame.accel).to_lowercase(),
+        format!("{:?}", args.frame.kernel).to_lowercase(),
     )
 }

@@ -24,24 +24,11 @@ pub struct RenderArgs {
     /// Output image: .png, .ppm (8-bit) or .exr (linear float).
     #[arg(short, long, default_value = "render.png")]
     output: PathBuf,
-    /// Image width (keeps the vertical field of view; the height follows the aspect ratio if not given).
-    #[arg(long)]
-    width: Option<u32>,
-    /// Image height.
-    #[arg(long)]
-    height: Option<u32>,
+    #[command(flatten)]
+    frame: FrameArgs,
     /// Most bounces after the primary hit.
     #[arg(long, default_value_t = 6)]
     max_depth: u32,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    threads: Option<usize>,
-    /// Acceleration structure: none, grid, bvh2 or bvh4.
-    #[arg(long, default_value = "bvh4")]
-    accel: AccelKind,
-    /// Camera rays one at a time (single) or in packets of 8 (packet, BVH4 only; same image).
-    #[arg(long, default_value = "packet")]
-    kernel: Kernel,
     /// The BVH2 builder when `--accel bvh2`: sah or midpoint.
     #[arg(long, default_value = "sah")]
     build: BuildKind,
@@ -113,6 +100,26 @@ fn positive(s: &str) -> Result<f32, String> {
 /// Set by Ctrl-C: the render stops at the next tile and keeps the last complete pass.
 static STOP: AtomicBool = AtomicBool::new(false);
 
+/// The frame's size, the threads and the structure and kernel that trace it (`render` and `bench`).
+#[derive(Args)]
+pub struct FrameArgs {
+    /// Image width (keeps the vertical field of view; the height follows the aspect ratio if not given).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height.
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Acceleration structure: none, grid, bvh2 or bvh4.
+    #[arg(long, default_value = "bvh4")]
+    pub accel: AccelKind,
+    /// Camera rays one at a time (single) or in packets of 8 (packet, BVH4 only; same image).
+    #[arg(long, default_value = "packet")]
+    pub kernel: Kernel,
+}
+
 /// Loads the named scene, or the built-in one.
 pub fn load_scene(path: Option<&Path>) -> whitted::Result<Scene> {
     match path {
@@ -158,8 +165,8 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
     if let Some(f) = args.focal {
         scene.camera.focal = f;
     }
-    let (width, height) = resolution(&scene, args.width, args.height)?;
-    let pool = thread_pool(args.threads)?;
+    let (width, height) = resolution(&scene, args.frame.width, args.frame.height)?;
+    let pool = thread_pool(args.frame.threads)?;
     let loaded = start.elapsed();
     if args.passes == 1 && (args.every.is_some() || args.progressive_out.is_some()) {
         return Err(whitted::Error::msg(
@@ -170,7 +177,7 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
     let build_start = Instant::now();
     let accel = Accel::build_with(
         Prims::new(&scene),
-        args.accel,
+        args.frame.accel,
         build_options(args.build, args.bins as usize),
     );
     let built = build_start.elapsed();
@@ -185,7 +192,7 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
         width,
         height,
         max_depth: args.max_depth,
-        kernel: args.kernel,
+        kernel: args.frame.kernel,
         spp: if args.passes > 1 { 1 } else { spp },
         seed: args.seed,
         roughness: args.roughness,
@@ -239,8 +246,8 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
             rendered.as_secs_f64(),
             loaded.as_secs_f64(),
             built.as_secs_f64(),
-            args.accel,
-            args.kernel,
+            args.frame.accel,
+            args.frame.kernel,
             pool.current_num_threads(),
             args.output.display()
         );
