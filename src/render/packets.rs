@@ -14,7 +14,7 @@ use super::sampler::PixelPattern;
 use super::shade::{Bounces, PixelSample, RayCounts, ShadowRay};
 use super::tiles::{TILE, Tile};
 use crate::accel::bvh4::Bvh4;
-use crate::accel::bvh4::packet::PACKET;
+use crate::accel::bvh4::packet::{PACKET, lanes};
 use crate::accel::policy::{AnyHit, Closest};
 use crate::accel::{Hit, Surface};
 use crate::geometry::ray::Ray;
@@ -71,13 +71,13 @@ impl Renderer<'_> {
                         sample
                     });
                     let colors = self.shade_packet(bvh, &rays, active, 0, &mut samples);
-                    for k in lanes(active) {
+                    for k in lanes(active as u32) {
                         sums[k] += colors[k];
                         samples[k].rays.primary += 1;
                         *rays_traced += samples[k].rays;
                     }
                 }
-                for k in lanes(active) {
+                for k in lanes(active as u32) {
                     let (x, y) = pixel(k);
                     buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] = sums[k] / self.samples() as f32;
                 }
@@ -124,7 +124,7 @@ impl Renderer<'_> {
         }
 
         let mut out = [Vec3::ZERO; PACKET];
-        for k in lanes(active) {
+        for k in lanes(active as u32) {
             let mut extra_shadows = 0;
             out[k] = match &surfaces[k] {
                 None => self.shade(&rays[k], &hits[k], depth, &mut samples[k]),
@@ -160,7 +160,7 @@ impl Renderer<'_> {
         samples: &mut Lanes<PixelSample>,
     ) -> Lanes<Vec3> {
         let octant = |r: &Ray| r.dir.cmplt(Vec3::ZERO).bitmask();
-        let mut live = lanes(mask);
+        let mut live = lanes(mask as u32);
         let coherent = match live.next() {
             Some(first) => live.all(|k| octant(&rays[k]) == octant(&rays[first])),
             None => true,
@@ -169,7 +169,7 @@ impl Renderer<'_> {
             return self.shade_packet(bvh, rays, mask, depth, samples);
         }
         let mut out = [Vec3::ZERO; PACKET];
-        for k in lanes(mask) {
+        for k in lanes(mask as u32) {
             out[k] = self.trace(&rays[k], depth, &mut samples[k]);
         }
         out
@@ -199,20 +199,15 @@ impl Renderer<'_> {
                 }
             }
             if active != 0 {
-                for k in lanes(active) {
+                for k in lanes(active as u32) {
                     samples[k].rays.shadow += 1;
                 }
                 let hit = bvh.traverse_packet::<AnyHit>(&rays, active, 0.0, &mut hits);
-                for k in lanes(hit) {
+                for k in lanes(hit as u32) {
                     blocked[k] |= 1 << i;
                 }
             }
         }
         blocked
     }
-}
-
-/// The set bits of a lane mask, lowest first.
-fn lanes(mask: u8) -> impl Iterator<Item = usize> {
-    (0..PACKET).filter(move |k| mask >> k & 1 == 1)
 }
