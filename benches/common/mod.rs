@@ -1,16 +1,37 @@
-//! What the benches share: the scene they load and how long criterion measures.
+//! What the benches share: the scene they load, how long criterion measures, the peer they are measured
+//! against and the table they print.
 
-use std::path::PathBuf;
+#[cfg(feature = "bench-embree")]
+pub mod embree;
+pub mod obvhs;
+pub mod table;
+
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, Criterion};
 
-/// `WHITTED_BENCH_SCENE`, or the full dragon of the workload document.
-pub fn scene_path() -> PathBuf {
-    std::env::var("WHITTED_BENCH_SCENE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|_| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/dragon_full.p3f"))
+/// The scenes a bench runs on: `WHITTED_BENCH_SCENE` alone, or the workload document's two dragons,
+/// the full one (871,414 triangles, `scenes/dragon_full.p3f`) and res2 (202,520; loaded bare, its
+/// default camera and light are the document's, computed from its bounds).
+pub fn scenes() -> Vec<PathBuf> {
+    if let Some(path) = std::env::var_os("WHITTED_BENCH_SCENE") {
+        return vec![PathBuf::from(path)];
+    }
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    vec![
+        dir.join("dragon_full.p3f"),
+        dir.join("models/dragon_vrip_res2.ply.gz"),
+    ]
+}
+
+/// A short name for a scene in bench ids: its file name up to the first dot.
+pub fn scene_name(path: &Path) -> String {
+    let name = path
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    name.split('.').next().unwrap_or_default().to_string()
 }
 
 /// A group of 10 samples over `seconds` each, or a quick smoke run with `WHITTED_BENCH_QUICK`.
