@@ -1,0 +1,151 @@
+//! The hot loops, one at a time, on a fixed and reduced workload, for `valgrind --tool=callgrind`
+//! (the scripts beside this file). Each loop runs inside a function named `measured_*` that is never
+//! inlined, so callgrind's `--toggle-collect` counts that loop's instructions and nothing of the loading,
+//! building or ray generation around it.
+//!
+//! The workload: the 202,520-triangle dragon (`scenes/models/dragon_vrip_res2.ply.gz`) with the
+//! benchmark's camera and light (`shared/bench/dragon-workload.md`) at 320x180, traced by the BVH4;
+//! the shading loop renders the course's `scenes/dragon.p3f` at 320x180, Whitted, 1 sample per pixel, on
+//! one thread.
+//!
+//! `hot_loops LOOP` prints `rays N` (or `triangles N` for the build): the figure the scripts divide the
+//! instruction count by.
+
+use std::hint::black_box;
+use std::path::Path;
+use std::process::ExitCode;
+
+use whitted::accel::bvh2::{Builder, Bvh2};
+use whitted::accel::bvh4::Bvh4;
+use whitted::accel::bvh4::packet::PACKET;
+use whitted::accel::policy::{AnyHit, Closest};
+use whitted::accel::{Accel, AccelKind, Hit, Prims};
+use whitted::geometry::ray::Ray;
+use whitted::render::{Options, Renderer};
+use whitted::scene::Scene;
+
+const LOOPS: &str = "closest-primary, closest-diffuse, any-shadow, packet-primary, packet-shadow, \
+                     build-sah, shade";
+const WIDTH: u32 = 320;
+const HEIGHT: u32 = 180;
+
+#[inline(never)]
+fn measured_closest(bvh: &Bvh4, rays: &[Ray]) -> usize {
+    let mut hits = 0;
+    for ray in rays {
+        let mut hit = Hit::miss(f32::INFINITY);
+        hits += bvh.traverse::<Closest>(ray, 0.0, &mut hit) as usize;
+    }
+    hits
+}
+
+#[inline(never)]
+fn measured_any(bvh: &Bvh4, rays: &[(Ray, f32)]) -> usize {
+    let mut hits = 0;
+    for (ray, t_max) in rays {
+        let mut hit = Hit::miss(*t_max);
+        hits += bvh.traverse::<AnyHit>(ray, 0.0, &mut hit) as usize;
+    }
+    hits
+}
+
+/// Consecutive rays in packets of [`PACKET`], as the renderer's tiles and the kernels bench form them.
+#[inline(never)]
+fn measured_packets<const ANY: bool>(bvh: &Bvh4, rays: &[(Ray, f32)]) -> usize {
+    let mut found = 0;
+    for chunk in rays.chunks(PACKET) {
+        let mut r = [chunk[0].0; PACKET];
+        let mut hits = [Hit::miss(0.0); PACKET];
+        for (k, (ray, t_max)) in chunk.iter().enumerate() {
+            (r[k], hits[k]) = (*ray, Hit::miss(*t_max));
+        }
+        let active = (1u16 << chunk.len()).wrapping_sub(1) as u8;
+        found += match ANY {
+            true => bvh.traverse_packet::<AnyHit>(&r, active, 0.0, &mut hits),
+            false => bvh.traverse_packet::<Closest>(&r, active, 0.0, &mut hits),
+        }
+        .count_ones() as usize;
+    }
+    found
+}
+
+#[inline(never)]
+fn measured_build(prims: Prims) -> usize {
+    Bvh4::from_bvh2(Bvh2::new(prims, Builder::Sah { bins: 12 }))
+        .stats()
+        .nodes
+}
+
+#[inline(never)]
+fn measured_render(renderer: &Renderer) -> u64 {
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let (_, rays) = renderer.render_pass(1, &|| {}, &never).expect("not stopped");
+    rays.total()
+}
+
+fn load(relative: &str) -> Result<Scene, String> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(relative);
+    whitted::scene::load(&path).map_err(|e| e.to_string())
+}
+
+fn run(name: &str) -> Result<(), String> {
+    // One thread: callgrind runs threads one at a time anyway, and a single worker keeps the counts
+    // independent of scheduling.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .map_err(|e| e.to_string())?;
+    if name == "shade" {
+        let scene = load("scenes/dragon.p3f")?;
+        let accel = Accel::build(Prims::new(&scene), AccelKind::Bvh4);
+        let mut options = Options::new(&scene);
+        (options.width, options.height) = (WIDTH, HEIGHT);
+        let renderer = Renderer::new(&scene, &accel, options);
+        let rays = pool.install(|| measured_render(&renderer));
+        println!("rays {rays}");
+        return Ok(());
+    }
+    let mut scene = load("scenes/models/dragon_vrip_res2.ply.gz")?;
+    (scene.camera.width, scene.camera.height) = (WIDTH, HEIGHT);
+    let prims = Prims::new(&scene);
+    if name == "build-sah" {
+        let nodes = pool.install(|| measured_build(prims));
+        black_box(nodes);
+        println!("triangles {}", scene.triangles.len());
+        return Ok(());
+    }
+    let accel = Accel::build(prims, AccelKind::Bvh4);
+    let Accel::Bvh4(bvh) = &accel else {
+        return Err("the dragon did not get a BVH4".into());
+    };
+    let w = whitted::workload::generate(&scene, &accel, 1);
+    let unbounded = |rays: &[Ray]| rays.iter().map(|r| (*r, f32::INFINITY)).collect::<Vec<_>>();
+    let (rays, hits) = match name {
+        "closest-primary" => (w.primary.len(), measured_closest(bvh, &w.primary)),
+        "closest-diffuse" => (w.diffuse.len(), measured_closest(bvh, &w.diffuse)),
+        "any-shadow" => (w.shadow.len(), measured_any(bvh, &w.shadow)),
+        "packet-primary" => (
+            w.primary.len(),
+            measured_packets::<false>(bvh, &unbounded(&w.primary)),
+        ),
+        "packet-shadow" => (w.shadow.len(), measured_packets::<true>(bvh, &w.shadow)),
+        _ => return Err(format!("unknown loop \"{name}\": expected one of {LOOPS}")),
+    };
+    println!("rays {rays}");
+    eprintln!("{name}: {hits} of {rays} rays hit");
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let Some(name) = std::env::args().nth(1) else {
+        eprintln!("usage: hot_loops LOOP (one of {LOOPS})");
+        return ExitCode::FAILURE;
+    };
+    match run(&name) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("hot_loops: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
