@@ -31,7 +31,7 @@ registry="${CARGO_HOME:-$HOME/.cargo}/registry/src/"
             exit 1
         }
         read -r unit n <"$tmp/$loop.count"
-        callgrind_annotate --threshold=100 "$tmp/$loop.out" >"$tmp/$loop.txt"
+        callgrind_annotate --threshold=100 "$tmp/$loop.out" >"$tmp/$loop.txt" 2>/dev/null
         total=$(awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1 }' "$tmp/$loop.txt")
         echo
         echo "## $loop: $n $unit, $total instructions, $((total / n)) per ${unit%s}"
