@@ -36,6 +36,7 @@
 //! ```
 
 pub mod accel;
+pub mod digest;
 pub mod error;
 pub mod geometry;
 pub mod render;

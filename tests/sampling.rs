@@ -261,13 +261,16 @@ fn progressive_passes_converge() {
     let mut mean = Progressive::new(1, 1);
     let never = AtomicBool::new(false);
     for pass in 1..=256 {
-        mean.add(&r.render_pass(pass, &|| {}, &never).unwrap().0);
+        mean.render_pass(&r, pass, &|| {}, &never).unwrap();
     }
+    assert_eq!(mean.passes(), 256);
     let got = mean.film().pixels[0].x;
     // Each pass is 0 or cos θ (about 0.95): σ of the mean ≈ 0.5 / 16 ≈ 0.03.
     assert!((got - exact).abs() < 0.1, "{got} vs {exact}");
     let stopped = AtomicBool::new(true);
     assert!(r.render_pass(257, &|| {}, &stopped).is_none());
+    assert!(mean.render_pass(&r, 257, &|| {}, &stopped).is_none());
+    assert_eq!(mean.passes(), 256, "a stopped pass is not counted");
 }
 
 /// `--passes` with `--every` and `--progressive-out` writes numbered snapshots; a count that is not a

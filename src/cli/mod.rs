@@ -3,6 +3,7 @@
 
 mod bench;
 mod info;
+mod merge;
 mod render;
 
 use std::process::ExitCode;
@@ -25,6 +26,9 @@ enum Command {
     Render(render::RenderArgs),
     /// Time frames of a scene (the course's dragon scene if none is given): fps, rays, Mrays/s.
     Bench(bench::BenchArgs),
+    /// Merge the .partial files of a frame rendered in parts (render --tiles / --passes-range) into one
+    /// image, after checking that they belong together and cover every pixel and pass exactly once.
+    Merge(merge::MergeArgs),
 }
 
 /// The BVH2 builder, as a command-line value.
@@ -52,6 +56,7 @@ pub fn main() -> ExitCode {
         Command::Info(args) => info::run(&args),
         Command::Render(args) => render::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Merge(args) => merge::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -7,8 +7,9 @@ use std::time::{Duration, Instant};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use whitted::accel::{Accel, AccelKind, Prims};
+use whitted::render::partial::{Part, Settings};
 use whitted::render::progressive::Progressive;
-use whitted::render::{Kernel, Options, Renderer, film::Film, tiles};
+use whitted::render::{Kernel, Options, Renderer, tiles};
 use whitted::scene::{self, Scene, check_resolution};
 
 use super::{BuildKind, build_options};
@@ -21,9 +22,24 @@ const DEFAULT_SCENE: &str = include_str!("../../scenes/default.p3f");
 pub struct RenderArgs {
     /// The scene (.p3f, .nff, .ply, .obj, optionally .gz); the built-in default scene if omitted.
     scene: Option<PathBuf>,
-    /// Output image: .png, .ppm (8-bit) or .exr (linear float).
+    /// Output image: .png, .ppm (8-bit) or .exr (linear float); or a .partial file (see --tiles).
     #[arg(short, long, default_value = "render.png")]
     output: PathBuf,
+    /// Render only part K of N of the image (K from 0; a fixed split of its tiles, balanced by area)
+    /// into a .partial file, for `whitted merge` to combine with the other parts.
+    #[arg(long, value_name = "K/N", value_parser = part_of)]
+    tiles: Option<(u32, u32)>,
+    /// Render only passes A to B-1 (from 0) of the --passes of a progressive render, into a .partial
+    /// file, for `whitted merge`.
+    #[arg(long, value_name = "A..B", value_parser = pass_range)]
+    passes_range: Option<(u32, u32)>,
+    /// Write the sums of the passes as a .partial file (implied by an output name ending in .partial).
+    #[arg(long)]
+    partial: bool,
+    /// With a .partial output: if the file is already there, whole, and holds exactly this part of this
+    /// render, do nothing (rerun a job array with --resume to redo only the missing or damaged parts).
+    #[arg(long)]
+    resume: bool,
     #[command(flatten)]
     frame: FrameArgs,
     /// Most bounces after the primary hit.
@@ -95,6 +111,34 @@ fn positive(s: &str) -> Result<f32, String> {
     } else {
         Err(format!("expected a number above 0, found {s}"))
     }
+}
+
+/// `K/N` with K < N.
+fn part_of(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("expected K/N, part K (from 0) of N parts, such as 3/8; found \"{s}\"");
+    let (k, n) = s.split_once('/').ok_or_else(bad)?;
+    let (k, n): (u32, u32) = (
+        k.trim().parse().map_err(|_| bad())?,
+        n.trim().parse().map_err(|_| bad())?,
+    );
+    if n == 0 || k >= n {
+        return Err(format!("part {k}/{n} does not exist: K counts from 0 to N-1"));
+    }
+    Ok((k, n))
+}
+
+/// `A..B` with A < B.
+fn pass_range(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("expected A..B, passes A to B-1 (from 0), such as 0..16; found \"{s}\"");
+    let (a, b) = s.split_once("..").ok_or_else(bad)?;
+    let (a, b): (u32, u32) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if a >= b {
+        return Err(format!("the pass range {a}..{b} is empty"));
+    }
+    Ok((a, b))
 }
 
 /// Set by Ctrl-C: the render stops at the next tile and keeps the last complete pass.
@@ -174,6 +218,32 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
         ));
     }
 
+    let partial = args.partial
+        || args
+            .output
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("partial"));
+    if !partial && (args.tiles.is_some() || args.passes_range.is_some()) {
+        return Err(whitted::Error::msg(
+            "--tiles and --passes-range render part of a frame: write it to a .partial file (-o part.partial) and combine the parts with `whitted merge`",
+        ));
+    }
+    if args.resume && !partial {
+        return Err(whitted::Error::msg("--resume applies to .partial outputs only"));
+    }
+    if partial && args.progressive_out.is_some() {
+        return Err(whitted::Error::msg(
+            "--progressive-out writes images; a .partial render cannot keep snapshots",
+        ));
+    }
+    let passes = args.passes_range.unwrap_or((0, args.passes));
+    if passes.1 > args.passes {
+        return Err(whitted::Error::msg(format!(
+            "--passes-range {}..{} goes beyond the render's {} passes (set --passes to the whole render's count)",
+            passes.0, passes.1, args.passes
+        )));
+    }
+
     let build_start = Instant::now();
     let accel = Accel::build_with(
         Prims::new(&scene),
@@ -210,37 +280,90 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
     }
 
     let render_start = Instant::now();
-    let mut mean = Progressive::new(width, height);
+    let (first, last) = passes;
+    let mut acc = match args.tiles {
+        Some((k, n)) => Progressive::for_tiles(width, height, tiles::part(width, height, k, n)),
+        None => Progressive::new(width, height),
+    };
     let every = args.every.unwrap_or(if args.progressive_out.is_some() {
         1
     } else {
         u32::MAX
     });
-    for pass in 1..=args.passes {
-        let label = (args.passes > 1).then(|| format!("pass {pass}/{}", args.passes));
-        let Some(film) = pool.install(|| render_with_progress(&renderer, pass, label, args.quiet)) else {
+    let out = Output {
+        args,
+        partial: partial.then(|| Settings {
+            scene: scene.fingerprint(),
+            width,
+            height,
+            spp: options.spp,
+            seed: options.seed,
+            max_depth: options.max_depth,
+            aperture: scene.camera.aperture,
+            focal: scene.camera.focal,
+            roughness: options.roughness,
+            passes: args.passes,
+        }),
+        first,
+    };
+    if let (true, Some(settings)) = (args.resume, out.partial) {
+        // A missing or damaged file, or one of other settings, is rendered again and replaced.
+        if let Ok(done) = Part::read(&args.output) {
+            if done.settings == settings && done.passes == (first..last) && done.tiles == acc.tile_indices() {
+                if !args.quiet {
+                    eprintln!(
+                        "whitted: {} holds this part already; not rendered again",
+                        args.output.display()
+                    );
+                }
+                return Ok(());
+            }
+        }
+    }
+    for pass in first + 1..=last {
+        let mut label = Vec::new();
+        if let Some((k, n)) = args.tiles {
+            label.push(format!("part {k}/{n}"));
+        }
+        if args.passes > 1 {
+            label.push(format!("pass {pass}/{}", args.passes));
+        }
+        if pool
+            .install(|| render_with_progress(&renderer, &mut acc, pass, label.join(", "), args.quiet))
+            .is_none()
+        {
             break;
-        };
-        mean.add(&film);
-        if pass % every == 0 && pass < args.passes {
-            write_snapshot(args, &mean)?;
+        }
+        if acc.passes() % every == 0 && pass < last {
+            out.write(&acc)?;
         }
     }
     let rendered = render_start.elapsed();
-    if mean.passes() == 0 {
+    if acc.passes() == 0 {
         return Err(whitted::Error::msg(
             "interrupted before the first pass was complete; nothing written",
         ));
     }
-    write_snapshot(args, &mean)?;
+    out.write(&acc)?;
     if !args.quiet {
-        let passes = match args.passes {
+        let wanted = last - first;
+        let passes = match wanted {
             1 => String::new(),
-            n if mean.passes() < n => format!(", interrupted after {} of {n} passes", mean.passes()),
+            n if acc.passes() < n => format!(", interrupted after {} of {n} passes", acc.passes()),
             n => format!(", {n} passes"),
         };
+        let part = match (args.tiles, args.passes_range) {
+            (None, None) => String::new(),
+            (tiles, range) => {
+                let tiles = tiles.map(|(k, n)| format!("part {k}/{n}, "));
+                let range = range.map(|(a, b)| format!("passes {a}..{b} of {}, ", args.passes));
+                format!(", {}{}", tiles.unwrap_or_default(), range.unwrap_or_default())
+                    .trim_end_matches(", ")
+                    .to_string()
+            }
+        };
         eprintln!(
-            "whitted: {}x{} in {:.3} s (load {:.3} s, build {:.3} s, accel {:?}, kernel {:?}, {} threads{passes}) -> {}",
+            "whitted: {}x{} in {:.3} s (load {:.3} s, build {:.3} s, accel {:?}, kernel {:?}, {} threads{passes}{part}) -> {}",
             width,
             height,
             rendered.as_secs_f64(),
@@ -255,36 +378,57 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
     Ok(())
 }
 
-/// Writes the mean so far to the output and, with `--progressive-out`, to a numbered copy there.
-fn write_snapshot(args: &RenderArgs, mean: &Progressive) -> whitted::Result<()> {
-    mean.film().write(&args.output, args.srgb)?;
-    if let Some(dir) = &args.progressive_out {
-        let stem = args.output.file_stem().unwrap_or_default().to_string_lossy();
-        let ext = args.output.extension().unwrap_or_default().to_string_lossy();
-        let name = format!("{stem}-{:04}.{ext}", mean.passes());
-        mean.film().write(&dir.join(name), args.srgb)?;
-    }
-    Ok(())
+/// Where and how the render is written.
+struct Output<'a> {
+    args: &'a RenderArgs,
+    /// The settings a .partial file records; `None` for an image.
+    partial: Option<Settings>,
+    /// The first pass rendered (from 0).
+    first: u32,
 }
 
-/// Renders pass `pass` with a progress bar on stderr that appears only if the pass takes more than a
-/// second; `None` if Ctrl-C stopped it.
-fn render_with_progress(renderer: &Renderer, pass: u32, label: Option<String>, quiet: bool) -> Option<Film> {
-    let (width, height) = renderer.size();
-    let total = tiles::tiles(width, height).len() as u64;
+impl Output<'_> {
+    /// Writes the sums or the mean so far to the output and, with `--progressive-out`, a numbered copy.
+    fn write(&self, acc: &Progressive) -> whitted::Result<()> {
+        let args = self.args;
+        if let Some(settings) = self.partial {
+            let part = Part::new(settings, acc, self.first, args.tiles.unwrap_or((0, 1)));
+            return part.write(&args.output);
+        }
+        let film = acc.film();
+        film.write(&args.output, args.srgb)?;
+        if let Some(dir) = &args.progressive_out {
+            let stem = args.output.file_stem().unwrap_or_default().to_string_lossy();
+            let ext = args.output.extension().unwrap_or_default().to_string_lossy();
+            let name = format!("{stem}-{:04}.{ext}", acc.passes());
+            film.write(&dir.join(name), args.srgb)?;
+        }
+        Ok(())
+    }
+}
+
+/// Renders pass `pass` into `acc` with a progress bar on stderr that appears only if the pass takes
+/// more than a second; `None` if Ctrl-C stopped it.
+fn render_with_progress(
+    renderer: &Renderer,
+    acc: &mut Progressive,
+    pass: u32,
+    label: String,
+    quiet: bool,
+) -> Option<()> {
+    let total = acc.tile_indices().len() as u64;
     let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
     bar.set_style(
         ProgressStyle::with_template("{elapsed_precise} {msg} [{bar:40}] {percent}% tiles, eta {eta}")
             .expect("valid template")
             .progress_chars("=> "),
     );
-    if let Some(label) = label {
-        bar.set_message(label);
-    }
+    bar.set_message(label);
     // Short frames never flash a bar: it is drawn from the first tile finished after this instant.
     let show_from = Instant::now() + Duration::from_secs(1);
     let shown = AtomicBool::new(quiet);
-    let film = renderer.render_pass(
+    let done = acc.render_pass(
+        renderer,
         pass,
         &|| {
             bar.inc(1);
@@ -296,5 +440,5 @@ fn render_with_progress(renderer: &Renderer, pass: u32, label: Option<String>, q
         &STOP,
     );
     bar.finish_and_clear();
-    film.map(|(film, _)| film)
+    done.map(|_| ())
 }

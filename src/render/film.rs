@@ -118,7 +118,7 @@ impl Film {
 }
 
 /// `dir/.name.PID.tmp`: in the same directory (so the rename is atomic), hidden, unique per process.
-fn temporary_name(path: &Path) -> PathBuf {
+pub(crate) fn temporary_name(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())

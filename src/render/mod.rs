@@ -12,6 +12,7 @@ pub mod film;
 pub mod light;
 pub mod optics;
 mod packets;
+pub mod partial;
 pub mod progressive;
 pub mod sampler;
 pub mod shade;
@@ -219,7 +220,6 @@ impl<'a> Renderer<'a> {
         }
     }
 
-    /// The colour of pixel `(x, y)` in pass `pass`: the mean of its samples, traced one by one.
     /// The colour of pixel `(x, y)` in pass `pass`: the mean of its samples, traced one by one; the rays
     /// are counted into `rays`.
     fn pixel_in_pass(
@@ -268,9 +268,34 @@ impl<'a> Renderer<'a> {
         stop: &AtomicBool,
     ) -> Option<(Film, RayCounts)> {
         let (w, h) = (self.options.width, self.options.height);
-        let tiles = tiles::tiles(w, h);
-        // Each tile fills a fixed-size buffer on the stack; the sample pattern is allocated once per
-        // tile and reused, so nothing is allocated per pixel or per ray.
+        let mut film = Film::new(w, h);
+        let rays = self.render_tiles(pass, &tiles::tiles(w, h), on_tile, stop, |_, tile, buf| {
+            for y in tile.y0..tile.y1 {
+                let row = (y * w) as usize;
+                let src = ((y - tile.y0) * TILE) as usize;
+                let n = (tile.x1 - tile.x0) as usize;
+                film.pixels[row + tile.x0 as usize..row + tile.x0 as usize + n]
+                    .copy_from_slice(&buf[src..src + n]);
+            }
+        })?;
+        Some((film, rays))
+    }
+
+    /// Renders pass `pass` of `tiles` only (a part of the frame), in parallel, then hands each tile's
+    /// pixels to `sink` in the order of `tiles`, as `(index in tiles, tile, pixels)` with the pixels
+    /// row-major at a stride of [`TILE`]. A pixel's colour depends only on the seed, the pixel and the
+    /// pass, so any split of the tiles renders the same pixels. `on_tile` and `stop` are as for
+    /// [`Renderer::render_pass`]; `None` if stopped, and then `sink` has seen nothing.
+    pub fn render_tiles(
+        &self,
+        pass: u32,
+        tiles: &[Tile],
+        on_tile: &(dyn Fn() + Sync),
+        stop: &AtomicBool,
+        mut sink: impl FnMut(usize, Tile, &[Vec3]),
+    ) -> Option<RayCounts> {
+        // Each tile fills a fixed-size buffer; the sample pattern is allocated once per tile and
+        // reused, so nothing is allocated per pixel or per ray.
         type Done = (Tile, [Vec3; (TILE * TILE) as usize], RayCounts);
         let done: Option<Vec<Done>> = tiles
             .par_iter()
@@ -298,18 +323,11 @@ impl<'a> Renderer<'a> {
                 Some((tile, buf, rays))
             })
             .collect();
-        let mut film = Film::new(w, h);
         let mut rays = RayCounts::default();
-        for (tile, buf, tile_rays) in &done? {
+        for (i, (tile, buf, tile_rays)) in done?.iter().enumerate() {
             rays += *tile_rays;
-            for y in tile.y0..tile.y1 {
-                let row = (y * w) as usize;
-                let src = ((y - tile.y0) * TILE) as usize;
-                let n = (tile.x1 - tile.x0) as usize;
-                film.pixels[row + tile.x0 as usize..row + tile.x0 as usize + n]
-                    .copy_from_slice(&buf[src..src + n]);
-            }
+            sink(i, *tile, buf);
         }
-        Some((film, rays))
+        Some(rays)
     }
 }

@@ -1,73 +1,140 @@
-//! Progressive rendering: passes of one jittered sample per pixel averaged into a running mean,
-//! col_n = col_{n−1} + (c_n − col_{n−1}) / n, so that the film after n passes is the mean of n passes
-//! (up to rounding) and can be shown or written at any point while it converges.
+//! Progressive rendering: passes of one jittered sample per pixel averaged into a running mean that can
+//! be shown or written at any point while it converges.
+//!
+//! The course writes the mean incrementally, col_n = col_{n−1} + (c_n − col_{n−1}) / n. Here the same
+//! mean is kept as a per-pixel `f64` sum of the passes' `f32` colours divided by n when asked for: a sum
+//! of a few thousand `f32` values is exact in `f64`'s 53 bits, so the mean does not drift with n as the
+//! incremental `f32` form does, and, unlike a mean, sums of passes rendered apart (on other machines, or
+//! other days) add up to exactly the sum of all of them. That is what makes a frame split into pass
+//! ranges ([`super::partial`]) merge into the same image as one long render.
+//!
+//! A `Progressive` covers the whole frame or a subset of its tiles (`--tiles K/N`).
 
+use std::sync::atomic::AtomicBool;
+
+use glam::Vec3;
+
+use super::Renderer;
 use super::film::Film;
+use super::shade::RayCounts;
+use super::tiles::{self, Tile};
 
-/// The running mean of the passes so far.
+/// Per-pixel sums of the passes so far over a set of tiles.
 #[derive(Clone, Debug)]
 pub struct Progressive {
-    film: Film,
+    width: u32,
+    height: u32,
+    /// Indices of the tiles covered, into [`tiles::tiles`] of the frame.
+    indices: Vec<u32>,
+    tiles: Vec<Tile>,
+    /// The tiles' pixels, tile after tile, each tile row-major at its own width.
+    sums: Vec<[f64; 3]>,
     passes: u32,
 }
 
 impl Progressive {
-    /// No pass yet: a black `width` × `height` film.
+    /// No pass yet over the whole `width` × `height` frame.
     pub fn new(width: u32, height: u32) -> Self {
+        let n = tiles::tiles(width, height).len() as u32;
+        Progressive::for_tiles(width, height, (0..n).collect())
+    }
+
+    /// No pass yet over the tiles `indices` (into [`tiles::tiles`]) of a `width` × `height` frame.
+    ///
+    /// # Panics
+    /// If the indices are out of range or not increasing (the callers take them from [`tiles::part`]).
+    pub fn for_tiles(width: u32, height: u32, indices: Vec<u32>) -> Self {
+        assert!(indices.windows(2).all(|w| w[0] < w[1]), "tile indices increase");
+        let all = tiles::tiles(width, height);
+        let tiles: Vec<Tile> = indices.iter().map(|&i| all[i as usize]).collect();
+        let pixels = tiles.iter().map(|t| area(*t)).sum();
         Progressive {
-            film: Film::new(width, height),
+            width,
+            height,
+            indices,
+            tiles,
+            sums: vec![[0.0; 3]; pixels],
             passes: 0,
         }
     }
 
-    /// Folds in one more pass (of the same size).
-    pub fn add(&mut self, pass: &Film) {
+    /// Folds in pass `pass` (from 1) of the renderer, which must render this size; `None`, with
+    /// nothing folded in, if `stop` was set (see [`Renderer::render_pass`]).
+    pub fn render_pass(
+        &mut self,
+        renderer: &Renderer,
+        pass: u32,
+        on_tile: &(dyn Fn() + Sync),
+        stop: &AtomicBool,
+    ) -> Option<RayCounts> {
         assert_eq!(
-            (pass.width, pass.height),
-            (self.film.width, self.film.height),
+            renderer.size(),
+            (self.width, self.height),
             "a pass of another size"
         );
+        let mut at = 0;
+        let sums = &mut self.sums;
+        let rays = renderer.render_tiles(pass, &self.tiles, on_tile, stop, |_, tile, buf| {
+            let w = (tile.x1 - tile.x0) as usize;
+            for row in 0..(tile.y1 - tile.y0) as usize {
+                let src = &buf[row * tiles::TILE as usize..][..w];
+                for (sum, c) in sums[at..at + w].iter_mut().zip(src) {
+                    for (s, v) in sum.iter_mut().zip(c.to_array()) {
+                        *s += f64::from(v);
+                    }
+                }
+                at += w;
+            }
+        })?;
         self.passes += 1;
-        let inv = 1.0 / self.passes as f32;
-        for (mean, c) in self.film.pixels.iter_mut().zip(&pass.pixels) {
-            *mean += (*c - *mean) * inv;
-        }
+        Some(rays)
     }
 
-    /// Passes averaged so far.
+    /// Passes folded in so far.
     pub fn passes(&self) -> u32 {
         self.passes
     }
 
-    /// The mean so far.
-    pub fn film(&self) -> &Film {
-        &self.film
+    /// The frame's size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// The indices of the tiles covered.
+    pub fn tile_indices(&self) -> &[u32] {
+        &self.indices
+    }
+
+    /// The per-pixel sums, tile after tile in the order of [`Progressive::tile_indices`].
+    pub fn sums(&self) -> &[[f64; 3]] {
+        &self.sums
+    }
+
+    /// The mean so far: sum / passes per pixel of the tiles covered, black elsewhere (and everywhere
+    /// before the first pass).
+    pub fn film(&self) -> Film {
+        let mut film = Film::new(self.width, self.height);
+        let n = f64::from(self.passes.max(1));
+        let mut sums = self.sums.iter();
+        for t in &self.tiles {
+            for y in t.y0..t.y1 {
+                for x in t.x0..t.x1 {
+                    let s = sums.next().expect("one sum per pixel");
+                    film.pixels[(y * self.width + x) as usize] = mean(*s, n);
+                }
+            }
+        }
+        film
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use glam::Vec3;
+/// A tile's pixel count.
+pub(crate) fn area(t: Tile) -> usize {
+    (t.x1 - t.x0) as usize * (t.y1 - t.y0) as usize
+}
 
-    use super::*;
-
-    #[test]
-    fn running_mean_is_the_mean() {
-        let mut p = Progressive::new(2, 1);
-        let values = [0.25f32, 1.0, 0.0, 0.5, 0.75];
-        for (i, v) in values.iter().enumerate() {
-            let mut f = Film::new(2, 1);
-            f.pixels = vec![Vec3::splat(*v), Vec3::new(i as f32, 0.0, 1.0)];
-            p.add(&f);
-        }
-        assert_eq!(p.passes(), 5);
-        let mean = values.iter().sum::<f32>() / 5.0;
-        assert!((p.film().pixels[0] - Vec3::splat(mean)).abs().max_element() < 1e-6);
-        assert!(
-            (p.film().pixels[1] - Vec3::new(2.0, 0.0, 1.0))
-                .abs()
-                .max_element()
-                < 1e-6
-        );
-    }
+/// The mean colour of `n` samples summing to `sum`; the one rounding to `f32` happens here, so a sum
+/// merged from parts gives the same bits as the same sum made in one go.
+pub(crate) fn mean(sum: [f64; 3], n: f64) -> Vec3 {
+    Vec3::new((sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32)
 }

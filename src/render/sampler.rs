@@ -12,20 +12,14 @@ use glam::{Vec2, Vec3};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
+use crate::digest::mix;
+
 /// Streams of one pixel: the pattern, then each sample's own.
 const PATTERN_STREAM: u32 = 0;
 
 /// A generator of uniform numbers for one pixel sample (or one pixel's pattern).
 pub struct Sampler {
     rng: Xoshiro256PlusPlus,
-}
-
-/// SplitMix64's finaliser (Steele, Lea, Flood 2014): a bijective mix, so distinct keys give distinct
-/// seeds and neighbouring pixels get unrelated streams.
-fn mix(mut z: u64) -> u64 {
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
 }
 
 impl Sampler {

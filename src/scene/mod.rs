@@ -1,5 +1,6 @@
 //! Scenes: the file formats and the structure-of-arrays store they fill.
 
+mod fingerprint;
 pub mod lex;
 pub mod obj;
 pub mod p3f;

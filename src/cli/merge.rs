@@ -1,0 +1,39 @@
+//! `whitted merge`: the parts of a frame rendered apart (`render --tiles K/N`, `--passes-range A..B`)
+//! into one image.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use whitted::render::partial;
+
+/// Arguments of `whitted merge`.
+#[derive(Args)]
+pub struct MergeArgs {
+    /// The image to write: .png, .ppm or .exr.
+    output: PathBuf,
+    /// The .partial files: together they must cover every pixel and pass exactly once.
+    #[arg(required = true)]
+    parts: Vec<PathBuf>,
+    /// Encode the output with the sRGB curve (as `render --srgb`).
+    #[arg(long)]
+    srgb: bool,
+    /// No summary.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+/// Checks and merges the parts, then writes the image (nothing is written if any check fails).
+pub fn run(args: &MergeArgs) -> whitted::Result<()> {
+    let film = partial::merge(&args.parts)?;
+    film.write(&args.output, args.srgb)?;
+    if !args.quiet {
+        eprintln!(
+            "whitted: merged {} parts into {}x{} -> {}",
+            args.parts.len(),
+            film.width,
+            film.height,
+            args.output.display()
+        );
+    }
+    Ok(())
+}
