@@ -87,6 +87,7 @@ fn build(c: &mut Criterion) {
         ("bvh2-midpoint", AccelKind::Bvh2, Builder::Midpoint),
         ("bvh2-sah", AccelKind::Bvh2, sah),
         ("bvh4", AccelKind::Bvh4, sah),
+        ("bvh8", AccelKind::Bvh8, sah),
         ("grid", AccelKind::Grid, sah),
     ];
     for path in common::scenes() {
@@ -135,6 +136,7 @@ fn build(c: &mut Criterion) {
             let sah = match &accel {
                 Accel::Bvh2(b) => Some(format!("{:.1}", b.stats().sah)),
                 Accel::Bvh4(b) => Some(format!("{:.1}", b.stats().sah)),
+                Accel::Bvh8(b) => Some(format!("{:.1}", b.stats().sah)),
                 _ => None,
             };
             rows.push((id.to_string(), vec![time(id, 1), time(id, all), sah]));

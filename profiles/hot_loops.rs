@@ -16,9 +16,9 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use whitted::accel::bvh2::{Builder, Bvh2};
-use whitted::accel::bvh4::Bvh4;
-use whitted::accel::bvh4::packet::PACKET;
 use whitted::accel::policy::{AnyHit, Closest};
+use whitted::accel::wide::Bvh4;
+use whitted::accel::wide::packet::PACKET;
 use whitted::accel::{Accel, AccelKind, Hit, Prims};
 use whitted::geometry::ray::Ray;
 use whitted::render::{Options, Renderer};

@@ -3,7 +3,7 @@
 use glam::Vec3;
 use proptest::prelude::*;
 use whitted::accel::bvh2::{Builder, Bvh2};
-use whitted::accel::bvh4::{self, Bvh4, EMPTY, LEAF, TRIANGLES, leaf_parts};
+use whitted::accel::wide::{EMPTY, LEAF, TRIANGLES, WideBvh, leaf_parts};
 use whitted::accel::{PrimKind, Prims};
 use whitted::geometry::{aabb::Aabb, cuboid, ray::safe_inverse};
 use whitted::scene::{Camera, Material, Scene};
@@ -68,46 +68,16 @@ proptest! {
         prop_assert!(seen.iter().all(|&c| c == 1));
     }
 
-    /// BVH4: every primitive reachable exactly once (through triangle blocks or id ranges), each child
-    /// slot's box around everything below it, empty slots inverted.
+    /// BVH4 and BVH8: every primitive reachable exactly once (through triangle blocks or id ranges),
+    /// each child slot's box around everything below it, empty slots inverted.
     #[test]
     fn bvh4_invariants(items in items()) {
-        let s = scene(&items);
-        let prims = Prims::new(&s);
-        let bvh = Bvh4::new(prims, 12).unwrap();
-        let mut seen = vec![0; prims.bounded() as usize];
-        let mut stack = vec![(bvh.root, bvh.bounds)];
-        while let Some((r, bounds)) = stack.pop() {
-            if r == EMPTY {
-                continue;
-            }
-            if r & LEAF != 0 {
-                let (start, count) = leaf_parts(r);
-                let ids: Vec<u32> = if r & TRIANGLES != 0 {
-                    bvh.tris[start..start + count.div_ceil(4)].iter().flat_map(|b| b.id).filter(|&id| id != u32::MAX).collect()
-                } else {
-                    bvh.ids[start..start + count].to_vec()
-                };
-                prop_assert_eq!(ids.len(), count);
-                for id in ids {
-                    seen[id as usize] += 1;
-                    prop_assert!(bounds.contains(&prims.bounds(id)));
-                }
-                continue;
-            }
-            let node = &bvh.nodes[r as usize];
-            for k in 0..4 {
-                let child = Bvh4::child_bounds(node, k);
-                if node.child[k] == EMPTY {
-                    prop_assert!(child.is_empty());
-                } else {
-                    prop_assert!(bounds.contains(&child));
-                }
-                stack.push((node.child[k], child));
-            }
-        }
-        prop_assert!(seen.iter().all(|&c| c == 1));
-        let _ = bvh4::MAX_PRIMS;
+        wide_invariants::<4>(&items)?;
+    }
+
+    #[test]
+    fn bvh8_invariants(items in items()) {
+        wide_invariants::<8>(&items)?;
     }
 
     /// The slab test is conservative: a ray through a point of the box (its corners and faces
@@ -166,4 +136,48 @@ fn sah_cost_beats_midpoint() {
     let sah = Bvh2::new(prims, Builder::Sah { bins: 12 }).stats().sah;
     let mid = Bvh2::new(prims, Builder::Midpoint).stats().sah;
     assert!(sah < mid, "SAH {sah} vs midpoint {mid}");
+}
+
+/// The wide BVH invariants for width `W` (see `bvh4_invariants`).
+fn wide_invariants<const W: usize>(items: &[(u8, Vec3, Vec3, f32)]) -> Result<(), TestCaseError> {
+    let s = scene(items);
+    let prims = Prims::new(&s);
+    let bvh = WideBvh::<W>::new(prims, 12).unwrap();
+    let mut seen = vec![0; prims.bounded() as usize];
+    let mut stack = vec![(bvh.root, bvh.bounds)];
+    while let Some((r, bounds)) = stack.pop() {
+        if r == EMPTY {
+            continue;
+        }
+        if r & LEAF != 0 {
+            let (start, count) = leaf_parts(r);
+            let ids: Vec<u32> = if r & TRIANGLES != 0 {
+                bvh.tris[start..start + count.div_ceil(4)]
+                    .iter()
+                    .flat_map(|b| b.id)
+                    .filter(|&id| id != u32::MAX)
+                    .collect()
+            } else {
+                bvh.ids[start..start + count].to_vec()
+            };
+            prop_assert_eq!(ids.len(), count);
+            for id in ids {
+                seen[id as usize] += 1;
+                prop_assert!(bounds.contains(&prims.bounds(id)));
+            }
+            continue;
+        }
+        let node = &bvh.nodes[r as usize];
+        for k in 0..W {
+            let child = WideBvh::<W>::child_bounds(node, k);
+            if node.child[k] == EMPTY {
+                prop_assert!(child.is_empty());
+            } else {
+                prop_assert!(bounds.contains(&child));
+            }
+            stack.push((node.child[k], child));
+        }
+    }
+    prop_assert!(seen.iter().all(|&c| c == 1));
+    Ok(())
 }

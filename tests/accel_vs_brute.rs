@@ -11,9 +11,9 @@ use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::{Rng, SeedableRng};
 use rayon::prelude::*;
 use whitted::accel::bvh2::Builder;
-use whitted::accel::bvh4::Bvh4;
-use whitted::accel::bvh4::packet::PACKET;
 use whitted::accel::policy::{AnyHit, Closest};
+use whitted::accel::wide::packet::PACKET;
+use whitted::accel::wide::{Bvh4, Simd};
 use whitted::accel::{Accel, AccelKind, BuildOptions, Hit, Prims};
 use whitted::geometry::ray::Ray;
 use whitted::render::camera::RayCamera;
@@ -121,6 +121,22 @@ fn check(scene: &Scene, cases: &[Case], name: &str) {
             hit
         })
         .collect();
+    // The BVH8 on each slab instruction set this CPU has (the portable one always).
+    let bvh8 = |simd: Simd| {
+        let mut accel = Accel::build(prims, AccelKind::Bvh8);
+        if let Accel::Bvh8(b) = &mut accel {
+            b.set_simd(simd).then_some(accel)
+        } else {
+            None
+        }
+    };
+    if !Simd::Avx2.available() {
+        eprintln!("{name}: this CPU has no AVX2; the BVH8 is checked on its portable slab test only");
+    }
+    let wide8 = [
+        bvh8(Simd::Portable).map(|a| ("bvh8 portable", a)),
+        bvh8(Simd::Avx2).map(|a| ("bvh8 avx2", a)),
+    ];
     let accels = [
         ("grid", Accel::build(prims, AccelKind::Grid)),
         (
@@ -148,7 +164,7 @@ fn check(scene: &Scene, cases: &[Case], name: &str) {
             ),
         ),
     ];
-    for (label, accel) in &accels {
+    for (label, accel) in accels.iter().chain(wide8.iter().flatten()) {
         if let Accel::Bvh4(bvh) = accel {
             check_packets(bvh, cases, &reference, &format!("{name}, {label}"));
         }

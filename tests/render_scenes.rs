@@ -51,6 +51,12 @@ fn check(path: &Path) {
         "{}: the grid differs from bvh4",
         path.display()
     );
+    assert_eq!(
+        render(&scene, AccelKind::Bvh8, 128),
+        a,
+        "{}: bvh8 differs from bvh4",
+        path.display()
+    );
     let size = if is_big(&scene) { 24 } else { 128 };
     let reference = render(&scene, AccelKind::None, size);
     assert_eq!(

@@ -28,9 +28,9 @@ use rayon::prelude::*;
 #[cfg(feature = "bench-embree")]
 use whitted::accel::PrimKind;
 use whitted::accel::bvh2::Builder;
-use whitted::accel::bvh4::Bvh4;
-use whitted::accel::bvh4::packet::PACKET;
 use whitted::accel::policy::{AnyHit, Closest};
+use whitted::accel::wide::packet::PACKET;
+use whitted::accel::wide::{Bvh4, Simd};
 use whitted::accel::{Accel, AccelKind, BuildOptions, Hit, Prims};
 use whitted::geometry::ray::Ray;
 use whitted::workload::{self, Workload};
@@ -180,8 +180,15 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     let prims = Prims::new(&scene);
     let with = |kind, builder| Accel::build_with(prims, kind, BuildOptions { builder, bins: 12 });
     let sah = Builder::Sah { bins: 12 };
+    // The BVH8 on its portable slab test too (two SSE halves), beside the AVX2 one where the CPU has it.
+    let mut bvh8_portable = with(AccelKind::Bvh8, sah);
+    if let Accel::Bvh8(b) = &mut bvh8_portable {
+        b.set_simd(Simd::Portable);
+    }
     let accels = [
         ("bvh4", with(AccelKind::Bvh4, sah)),
+        ("bvh8", with(AccelKind::Bvh8, sah)),
+        ("bvh8-portable", bvh8_portable),
         ("bvh2-sah", with(AccelKind::Bvh2, sah)),
         ("bvh2-midpoint", with(AccelKind::Bvh2, Builder::Midpoint)),
         ("grid", with(AccelKind::Grid, sah)),
@@ -319,7 +326,10 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
         blocked.len(),
         w.shadow.len()
     );
-    for (name, accel) in &accels[..2] {
+    for (name, accel) in accels
+        .iter()
+        .filter(|(n, _)| ["bvh4", "bvh8", "bvh2-sah"].contains(n))
+    {
         g.throughput(Throughput::Elements(blocked.len() as u64));
         g.bench_function(format!("{name}/blocked-any"), |b| {
             b.iter(|| any(accel, black_box(&blocked)))
@@ -384,12 +394,22 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     }
 
     // All threads: the same work split in chunks of 256 rays (32 packets) across rayon's pool.
-    let bvh4_accel = &accels[0].1;
     let all = rayon::current_num_threads();
+    for (name, accel) in accels.iter().filter(|(n, _)| ["bvh4", "bvh8"].contains(n)) {
+        g.throughput(Throughput::Elements(n_primary));
+        g.bench_function(format!("{name}/primary/{all}-threads"), |b| {
+            b.iter(|| par(black_box(&w.primary), |r| closest(accel, r)))
+        });
+        g.throughput(Throughput::Elements(n_shadow));
+        g.bench_function(format!("{name}/shadow-any/{all}-threads"), |b| {
+            b.iter(|| par(black_box(&w.shadow), |r| any(accel, r)))
+        });
+        g.throughput(Throughput::Elements(n_diffuse));
+        g.bench_function(format!("{name}/diffuse/{all}-threads"), |b| {
+            b.iter(|| par(black_box(&w.diffuse), |r| closest(accel, r)))
+        });
+    }
     g.throughput(Throughput::Elements(n_primary));
-    g.bench_function(format!("bvh4/primary/{all}-threads"), |b| {
-        b.iter(|| par(black_box(&w.primary), |r| closest(bvh4_accel, r)))
-    });
     g.bench_function(format!("bvh4-packet/primary/{all}-threads"), |b| {
         b.iter(|| par(black_box(&primary_packets), |p| packet_hits::<false>(bvh4, p)))
     });
@@ -397,9 +417,6 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
         b.iter(|| par(black_box(&w.primary), |r| cwbvh.closest(r)))
     });
     g.throughput(Throughput::Elements(n_shadow));
-    g.bench_function(format!("bvh4/shadow-any/{all}-threads"), |b| {
-        b.iter(|| par(black_box(&w.shadow), |r| any(bvh4_accel, r)))
-    });
     g.bench_function(format!("bvh4-packet/shadow-any/{all}-threads"), |b| {
         b.iter(|| par(black_box(&shadow_packets), |p| packet_hits::<true>(bvh4, p)))
     });
@@ -407,9 +424,6 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
         b.iter(|| par(black_box(&w.shadow), |r| cwbvh.occluded(r)))
     });
     g.throughput(Throughput::Elements(n_diffuse));
-    g.bench_function(format!("bvh4/diffuse/{all}-threads"), |b| {
-        b.iter(|| par(black_box(&w.diffuse), |r| closest(bvh4_accel, r)))
-    });
     g.bench_function(format!("bvh4-packet/diffuse/{all}-threads"), |b| {
         b.iter(|| par(black_box(&diffuse_packets), |p| packet_hits::<false>(bvh4, p)))
     });
@@ -465,15 +479,22 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     let counts = [n_primary, n_shadow, n_diffuse].map(|n| n as f64);
     let mrays = |id: String, n: f64| table::median(&group, &id, since).map(|s| n / s * 1e-6);
     let ratio = |a: Option<f64>, b: Option<f64>| a.zip(b).map(|(a, b)| format!("{:.2}x", a / b));
-    let mut columns = vec!["bvh4", "bvh4-packet", "bvh2-sah", "obvhs-cwbvh", "obvhs-bvh2"];
+    let mut columns = vec![
+        "bvh4",
+        "bvh8",
+        "bvh4-packet",
+        "bvh2-sah",
+        "obvhs-cwbvh",
+        "obvhs-bvh2",
+    ];
     if cfg!(feature = "bench-embree") {
         columns.extend(["embree", "embree-8"]);
     }
     let mut header = vec!["rays"];
     header.extend(&columns);
-    header.extend(["bvh4 / best obvhs", "packets / best obvhs"]);
+    header.extend(["best single / best obvhs", "packets / best obvhs"]);
     if cfg!(feature = "bench-embree") {
-        header.extend(["bvh4 / embree", "packets / embree-8"]);
+        header.extend(["best single / embree", "packets / embree-8"]);
     }
     for threads in [1, all] {
         let suffix = match threads {
@@ -494,10 +515,11 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
                     .chain(col("obvhs-bvh2"))
                     .reduce(f64::max);
                 let mut cells: Vec<Option<String>> = v.iter().map(|x| x.map(|x| format!("{x:.2}"))).collect();
-                cells.push(ratio(col("bvh4"), obvhs));
+                let single = col("bvh4").into_iter().chain(col("bvh8")).reduce(f64::max);
+                cells.push(ratio(single, obvhs));
                 cells.push(ratio(col("bvh4-packet"), obvhs));
                 if cfg!(feature = "bench-embree") {
-                    cells.push(ratio(col("bvh4"), col("embree")));
+                    cells.push(ratio(single, col("embree")));
                     cells.push(ratio(col("bvh4-packet"), col("embree-8")));
                 }
                 (set.to_string(), cells)

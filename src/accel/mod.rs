@@ -4,11 +4,11 @@
 
 pub mod brute;
 pub mod bvh2;
-pub mod bvh4;
 pub mod grid;
 pub mod policy;
 pub mod prims;
 pub mod stack;
+pub mod wide;
 
 use std::str::FromStr;
 
@@ -17,9 +17,9 @@ pub use prims::{Hit, PrimKind, Prims, Surface};
 use crate::geometry::ray::Ray;
 use brute::Brute;
 use bvh2::{Builder, Bvh2};
-use bvh4::Bvh4;
 use grid::Grid;
 use policy::{AnyHit, Closest};
+use wide::{Bvh4, Bvh8};
 
 /// Which structure to build.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,6 +32,8 @@ pub enum AccelKind {
     Bvh2,
     /// 4-wide BVH with SIMD node tests (the default).
     Bvh4,
+    /// 8-wide BVH: one AVX2 slab test per node where the CPU has AVX2 (two SSE halves elsewhere).
+    Bvh8,
 }
 
 /// How the BVHs are built.
@@ -61,8 +63,9 @@ impl FromStr for AccelKind {
             "grid" => Ok(AccelKind::Grid),
             "bvh2" => Ok(AccelKind::Bvh2),
             "bvh4" => Ok(AccelKind::Bvh4),
+            "bvh8" => Ok(AccelKind::Bvh8),
             _ => Err(format!(
-                "unknown accelerator \"{s}\": expected none, grid, bvh2 or bvh4"
+                "unknown accelerator \"{s}\": expected none, grid, bvh2, bvh4 or bvh8"
             )),
         }
     }
@@ -79,6 +82,8 @@ pub enum Accel<'a> {
     Bvh2(Bvh2<'a>),
     /// 4-wide BVH.
     Bvh4(Bvh4<'a>),
+    /// 8-wide BVH.
+    Bvh8(Bvh8<'a>),
 }
 
 impl<'a> Accel<'a> {
@@ -87,8 +92,8 @@ impl<'a> Accel<'a> {
         Self::build_with(prims, kind, BuildOptions::default())
     }
 
-    /// Builds the chosen structure with explicit build options. A scene too large for the BVH4's leaf
-    /// references gets a BVH2.
+    /// Builds the chosen structure with explicit build options. A scene too large for the wide BVHs'
+    /// leaf references gets a BVH2.
     pub fn build_with(prims: Prims<'a>, kind: AccelKind, options: BuildOptions) -> Self {
         match kind {
             AccelKind::None => Accel::Brute(Brute::new(prims)),
@@ -96,6 +101,10 @@ impl<'a> Accel<'a> {
             AccelKind::Bvh2 => Accel::Bvh2(Bvh2::new(prims, options.builder)),
             AccelKind::Bvh4 => match Bvh4::new(prims, options.bins) {
                 Some(b) => Accel::Bvh4(b),
+                None => Accel::Bvh2(Bvh2::new(prims, Builder::Sah { bins: options.bins })),
+            },
+            AccelKind::Bvh8 => match Bvh8::new(prims, options.bins) {
+                Some(b) => Accel::Bvh8(b),
                 None => Accel::Bvh2(Bvh2::new(prims, Builder::Sah { bins: options.bins })),
             },
         }
@@ -109,6 +118,7 @@ impl<'a> Accel<'a> {
             Accel::Grid(g) => g.stats().to_string(),
             Accel::Bvh2(b) => format!("bvh2: {}", b.stats()),
             Accel::Bvh4(b) => format!("bvh4: {}", b.stats()),
+            Accel::Bvh8(b) => format!("bvh8 ({:?} slab tests): {}", b.simd(), b.stats()),
         }
     }
 
@@ -120,6 +130,7 @@ impl<'a> Accel<'a> {
             Accel::Grid(g) => g.traverse::<Closest>(ray, t_min, hit),
             Accel::Bvh2(b) => b.traverse::<Closest>(ray, t_min, hit),
             Accel::Bvh4(b) => b.traverse::<Closest>(ray, t_min, hit),
+            Accel::Bvh8(b) => b.traverse::<Closest>(ray, t_min, hit),
         }
     }
 
@@ -132,6 +143,7 @@ impl<'a> Accel<'a> {
             Accel::Grid(g) => g.traverse::<AnyHit>(ray, t_min, &mut hit),
             Accel::Bvh2(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
             Accel::Bvh4(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
+            Accel::Bvh8(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
         }
     }
 }

@@ -17,7 +17,7 @@ pub struct InfoArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
-    /// Also build this accelerator (none, grid, bvh2, bvh4) and report its build time and shape.
+    /// Also build this accelerator (none, grid, bvh2, bvh4, bvh8) and report its build time and shape.
     #[arg(long)]
     accel: Option<AccelKind>,
     /// The BVH2 builder when `--accel bvh2`: sah or midpoint.

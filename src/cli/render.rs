@@ -156,7 +156,7 @@ pub struct FrameArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Acceleration structure: none, grid, bvh2 or bvh4.
+    /// Acceleration structure: none, grid, bvh2, bvh4 or bvh8 (8-wide nodes, AVX2 where the CPU has it).
     #[arg(long, default_value = "bvh4")]
     pub accel: AccelKind,
     /// Camera rays one at a time (single) or in packets of 8 (packet, BVH4 only; same image).

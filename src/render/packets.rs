@@ -13,9 +13,9 @@ use super::Renderer;
 use super::sampler::PixelPattern;
 use super::shade::{Bounces, PixelSample, RayCounts, ShadowRay};
 use super::tiles::{TILE, Tile};
-use crate::accel::bvh4::Bvh4;
-use crate::accel::bvh4::packet::{PACKET, lanes};
 use crate::accel::policy::{AnyHit, Closest};
+use crate::accel::wide::Bvh4;
+use crate::accel::wide::packet::{PACKET, lanes};
 use crate::accel::{Hit, Surface};
 use crate::geometry::ray::Ray;
 

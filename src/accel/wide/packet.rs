@@ -499,7 +499,7 @@ mod tests {
 
     /// Throughput of the packet kernel against the single-ray kernel on the dragon at 800×600, one
     /// thread: camera rays (closest hit) and the shadow rays of their hits toward each light (any hit).
-    /// `cargo test --release --lib accel::bvh4::packet -- --ignored --nocapture`
+    /// `cargo test --release --lib accel::wide::packet -- --ignored --nocapture`
     #[test]
     #[ignore]
     fn throughput_single_vs_packet() {

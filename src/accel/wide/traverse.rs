@@ -1,62 +1,51 @@
-//! The single-ray BVH4 kernel, written once for closest and any hit.
+//! The single-ray kernel of the wide BVHs, written once for closest and any hit, both widths and every
+//! slab instruction set ([`super::slab`]).
 //!
-//! Per node: one 4-lane slab test of the four children. The near and far planes of each axis are chosen
+//! Per node: one `W`-lane slab test of the children. The near and far planes of each axis are chosen
 //! once per ray by the sign of its direction (not a min/max per node), which keeps the empty slots'
 //! inverted boxes empty. Closest-hit visits the hit children nearest first and skips stack entries whose entry
 //! distance lies beyond the closest hit so far; any-hit visits them in any order and returns at the first
 //! hit.
 
-use wide::f32x4;
-
-use super::{Bvh4, ChildRef, EMPTY, LEAF, STACK, TRIANGLES, leaf_parts};
+#[cfg(target_arch = "x86_64")]
+use super::slab::Avx8;
+use super::slab::{Lanes, Portable8, Simd, Sse4};
+use super::{Bvh4, Bvh8, ChildRef, EMPTY, LEAF, STACK_WIDE, TRIANGLES, WideBvh, leaf_parts};
 use crate::accel::policy::HitPolicy;
 use crate::accel::prims::Hit;
 use crate::accel::stack::Stack;
-use crate::geometry::ray::{CULL_MARGIN, Ray, SLAB_ROBUST, safe_inverse};
-
-/// A ray prepared for 4-wide slab tests: origin and inverse direction splatted, and per axis whether
-/// the direction is negative, which makes the max plane the near one (Embree's near/far plane offsets):
-/// the planes are picked once per ray, not blended per node.
-struct Prepared {
-    origin: [f32x4; 3],
-    inv: [f32x4; 3],
-    flip: [bool; 3],
-}
-
-impl Prepared {
-    #[inline(always)]
-    fn new(ray: &Ray) -> Self {
-        let inv = safe_inverse(ray.dir);
-        Prepared {
-            origin: [
-                f32x4::splat(ray.origin.x),
-                f32x4::splat(ray.origin.y),
-                f32x4::splat(ray.origin.z),
-            ],
-            inv: [f32x4::splat(inv.x), f32x4::splat(inv.y), f32x4::splat(inv.z)],
-            flip: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
-        }
-    }
-}
+use crate::geometry::ray::{CULL_MARGIN, Ray};
 
 impl Bvh4<'_> {
-    /// The four children's entry distances and the mask of those the ray enters within `[t_min, t_max]`.
-    /// An empty slot's inverted box gives near = +∞ > far = −∞ whichever plane is near.
-    #[inline(always)]
-    fn slab4(&self, node: u32, r: &Prepared, t_min: f32, t_max: f32) -> (f32x4, u32) {
-        let n = &self.nodes[node as usize];
-        let mut near = f32x4::splat(t_min);
-        let mut far = f32x4::splat(f32::INFINITY);
-        for axis in 0..3 {
-            let (a, b) = (&n.min[axis], &n.max[axis]);
-            let (a, b) = if r.flip[axis] { (b, a) } else { (a, b) };
-            near = near.fast_max((f32x4::new(*a) - r.origin[axis]) * r.inv[axis]);
-            far = far.fast_min((f32x4::new(*b) - r.origin[axis]) * r.inv[axis]);
+    /// The closest (or, with [`crate::accel::policy::AnyHit`], any) hit with `t` in `(t_min, hit.t)`.
+    #[inline]
+    pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        self.traverse_with::<P, Sse4>(ray, t_min, hit)
+    }
+}
+
+impl Bvh8<'_> {
+    /// The closest (or any) hit with `t` in `(t_min, hit.t)`, on the instruction set chosen at build
+    /// time ([`WideBvh::simd`]).
+    #[inline]
+    pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        match self.simd {
+            // SAFETY: `simd` is `Avx2` only if the CPU has AVX2 and FMA (`Simd::detect`, `set_simd`).
+            #[cfg(target_arch = "x86_64")]
+            Simd::Avx2 => unsafe { self.traverse_avx2::<P>(ray, t_min, hit) },
+            _ => self.traverse_with::<P, Portable8>(ray, t_min, hit),
         }
-        let far = (far * f32x4::splat(SLAB_ROBUST)).fast_min(f32x4::splat(t_max));
-        (near, near.simd_le(far).to_bitmask())
     }
 
+    /// The kernel compiled for AVX2, with the 256-bit slab test inlined into it.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn traverse_avx2<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        self.traverse_with::<P, Avx8>(ray, t_min, hit)
+    }
+}
+
+impl<const W: usize> WideBvh<'_, W> {
     /// Tests the primitives of a leaf; true if the search is over (any-hit found one). Triangles go four
     /// at a time through their SIMD blocks, other kinds one by one.
     #[inline(always)]
@@ -93,15 +82,15 @@ impl Bvh4<'_> {
         P::ANY && hit_one
     }
 
-    /// The one single-ray traversal for both policies.
-    #[inline]
-    pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+    /// The one single-ray traversal, for both policies, every width and every slab instruction set.
+    #[inline(always)]
+    fn traverse_with<P: HitPolicy, L: Lanes<W>>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
         let mut found = self.prims.intersect_planes::<P>(ray, t_min, hit);
         if (P::ANY && found) || self.root == EMPTY {
             return found;
         }
-        let r = Prepared::new(ray);
-        let mut stack = Stack::<(ChildRef, f32), STACK>::new();
+        let r = L::prepare(ray);
+        let mut stack = Stack::<(ChildRef, f32), STACK_WIDE>::new();
         let mut current = self.root;
         loop {
             if current & LEAF != 0 {
@@ -109,10 +98,9 @@ impl Bvh4<'_> {
                     return true;
                 }
             } else {
-                let (near, mut mask) = self.slab4(current, &r, t_min, hit.t * CULL_MARGIN);
+                let node = &self.nodes[current as usize];
+                let (t, mut mask) = L::slab(node, &r, t_min, hit.t * CULL_MARGIN);
                 if mask != 0 {
-                    let node = &self.nodes[current as usize];
-                    let t = near.to_array();
                     if mask.count_ones() == 1 {
                         current = node.child[mask.trailing_zeros() as usize];
                         continue;
@@ -144,7 +132,8 @@ impl Bvh4<'_> {
     }
 }
 
-/// Sorts 2 to 4 entries by decreasing entry distance (insertion sort: at most six compares).
+/// Sorts 2 to 8 entries by decreasing entry distance (insertion sort: at most six compares for four,
+/// and a ray enters more than four of eight children rarely).
 #[inline(always)]
 fn sort_far_to_near(run: &mut [(ChildRef, f32)]) {
     for i in 1..run.len() {

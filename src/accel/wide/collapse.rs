@@ -1,28 +1,28 @@
-//! BVH2 → BVH4: each 4-wide node takes its BVH2 node's two children and, while it has fewer than four,
-//! opens the interior child with the largest surface area (the one a ray is most likely to enter), so the
-//! wide node replaces the most likely-visited binary levels.
+//! BVH2 → W-wide BVH: each wide node takes its BVH2 node's two children and, while it has fewer than
+//! `W`, opens the interior child with the largest surface area (the one a ray is most likely to enter),
+//! so the wide node replaces the most likely-visited binary levels.
 
 use super::tri4::Tri4;
-use super::{COUNT_BITS, ChildRef, EMPTY, LEAF, Node4, TRIANGLES};
-use crate::accel::bvh2::Node;
+use super::{COUNT_BITS, ChildRef, EMPTY, LEAF, Node, TRIANGLES};
+use crate::accel::bvh2::Node as Node2;
 use crate::accel::prims::{PrimKind, Prims};
 
 /// The collapsed tree: nodes depth-first (root first), the root reference, and the triangle blocks
 /// that triangle leaves point into, in the order a depth-first walk meets them.
-pub struct Collapsed {
-    pub nodes: Vec<Node4>,
+pub struct Collapsed<const W: usize> {
+    pub nodes: Vec<Node<W>>,
     pub root: ChildRef,
     pub tris: Vec<Tri4>,
 }
 
 /// Collapses a BVH2 whose leaves hold one kind of primitive each.
-pub fn collapse(nodes2: &[Node], ids: &[u32], prims: &Prims) -> Collapsed {
+pub fn collapse<const W: usize>(nodes2: &[Node2], ids: &[u32], prims: &Prims) -> Collapsed<W> {
     let mut c = Collapser {
         nodes2,
         ids,
         prims,
         out: Collapsed {
-            nodes: Vec::with_capacity(nodes2.len() / 3 + 1),
+            nodes: Vec::with_capacity(nodes2.len() / (W - 1) + 1),
             root: EMPTY,
             tris: Vec::with_capacity(nodes2.len() / 4),
         },
@@ -33,16 +33,16 @@ pub fn collapse(nodes2: &[Node], ids: &[u32], prims: &Prims) -> Collapsed {
     c.out
 }
 
-struct Collapser<'a> {
-    nodes2: &'a [Node],
+struct Collapser<'a, const W: usize> {
+    nodes2: &'a [Node2],
     ids: &'a [u32],
     prims: &'a Prims<'a>,
-    out: Collapsed,
+    out: Collapsed<W>,
 }
 
-impl Collapser<'_> {
+impl<const W: usize> Collapser<'_, W> {
     /// A leaf reference: triangles are packed into SIMD blocks, other kinds keep their id range.
-    fn leaf(&mut self, n: &Node) -> ChildRef {
+    fn leaf(&mut self, n: &Node2) -> ChildRef {
         debug_assert!(n.count < 1 << COUNT_BITS);
         let ids = &self.ids[n.first as usize..(n.first + n.count) as usize];
         // Leaves hold one kind (the builder splits mixed ones), so the first id tells.
@@ -66,15 +66,16 @@ impl Collapser<'_> {
         LEAF | TRIANGLES | (start << COUNT_BITS) | n.count
     }
 
-    /// Appends the 4-wide node for interior BVH2 node `i` and, after it, its subtrees in order.
+    /// Appends the wide node for interior BVH2 node `i` and, after it, its subtrees in order.
     fn emit(&mut self, i: usize) -> u32 {
         let nodes2 = self.nodes2;
         let at = self.out.nodes.len();
-        self.out.nodes.push(Node4::EMPTY);
-        // Gather up to four BVH2 nodes under `i`.
-        let mut slots = [nodes2[i].first as usize, nodes2[i].first as usize + 1, 0, 0];
+        self.out.nodes.push(Node::EMPTY);
+        // Gather up to W BVH2 nodes under `i`.
+        let mut slots = [0usize; W];
+        slots[..2].copy_from_slice(&[nodes2[i].first as usize, nodes2[i].first as usize + 1]);
         let mut len = 2;
-        while len < 4 {
+        while len < W {
             let open = (0..len)
                 .filter(|&k| !nodes2[slots[k]].is_leaf())
                 .max_by(|&a, &b| {
@@ -89,7 +90,7 @@ impl Collapser<'_> {
             slots[len] = n.first as usize + 1;
             len += 1;
         }
-        let mut node = Node4::EMPTY;
+        let mut node = Node::<W>::EMPTY;
         for (k, &s) in slots[..len].iter().enumerate() {
             let child = &nodes2[s];
             for axis in 0..3 {

@@ -1,12 +1,21 @@
-//! The 4-wide BVH: the SAH BVH2 collapsed to four children per node (Dammertz et al. 2008, "Shallow
-//! Bounding Volume Hierarchies for Fast SIMD Ray Tracing of Incoherent Rays"; Wald et al. 2008) and
-//! flattened depth-first into one array. Each node keeps its four children's boxes as structure of arrays,
-//! so one 4-lane slab test answers all four at once.
+//! Wide BVHs: the SAH BVH2 collapsed to `W` children per node (Dammertz et al. 2008, "Shallow Bounding
+//! Volume Hierarchies for Fast SIMD Ray Tracing of Incoherent Rays"; Wald et al. 2008) and flattened
+//! depth-first into one array. Each node keeps its children's boxes as structure of arrays, so one
+//! `W`-lane slab test answers all of them at once.
+//!
+//! One structure, one collapse and one single-ray kernel serve both widths: [`Bvh4`] (4 lanes of SSE,
+//! the portable default, and the only width with a packet kernel) and [`Bvh8`] (8 lanes: one AVX2
+//! register where the CPU has AVX2, detected at run time, else two SSE halves). Wider nodes mean fewer
+//! node visits and fewer stack operations per ray, which is where half of a BVH4 ray's instructions go
+//! (`profiles/`).
 
 mod collapse;
 pub mod packet;
+mod slab;
 mod traverse;
 pub mod tri4;
+
+pub use slab::Simd;
 
 use glam::Vec3;
 
@@ -26,31 +35,39 @@ pub const TRIANGLES: u32 = 1 << 30;
 pub const COUNT_BITS: u32 = 4;
 /// An unused child slot (its box is inverted, so no ray ever enters it).
 pub const EMPTY: ChildRef = u32::MAX;
-/// Traversal stack depth (single ray and packet): a node pushes at most four children and pops one, so
+/// Traversal stack depth of the BVH4's packets: a node pushes at most four children and pops one, so
 /// three entries per level of a tree no deeper than the BVH2 it was collapsed from.
 const STACK: usize = 3 * bvh2::MAX_DEPTH + 1;
+/// Single-ray traversal stack depth, for any width up to 8 (seven entries per level; the stack is not
+/// cleared, so its size costs nothing but address space).
+const STACK_WIDE: usize = 7 * bvh2::MAX_DEPTH + 1;
 /// The most primitives a BVH4 can index: what fits a leaf reference's start beside its count.
 pub const MAX_PRIMS: u32 = 1 << (30 - COUNT_BITS);
 
-/// A node: four children's boxes as component arrays, then their references. 112 bytes, aligned to
-/// a 64-byte cache line so a node spans exactly two lines.
+/// A node: its `W` children's boxes as component arrays, then their references. Aligned to a 64-byte
+/// cache line: a 4-wide node (112 bytes) spans exactly two lines, an 8-wide one (224 bytes) four.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
-pub struct Node4 {
+pub struct Node<const W: usize> {
     /// Children's smallest x, y, z.
-    pub min: [[f32; 4]; 3],
+    pub min: [[f32; W]; 3],
     /// Children's largest x, y, z.
-    pub max: [[f32; 4]; 3],
+    pub max: [[f32; W]; 3],
     /// Children.
-    pub child: [ChildRef; 4],
+    pub child: [ChildRef; W],
 }
 
-impl Node4 {
-    /// A node with four empty slots (inverted boxes).
-    pub const EMPTY: Node4 = Node4 {
-        min: [[f32::INFINITY; 4]; 3],
-        max: [[f32::NEG_INFINITY; 4]; 3],
-        child: [EMPTY; 4],
+/// A 4-wide node.
+pub type Node4 = Node<4>;
+/// An 8-wide node.
+pub type Node8 = Node<8>;
+
+impl<const W: usize> Node<W> {
+    /// A node with every slot empty (inverted boxes).
+    pub const EMPTY: Self = Node {
+        min: [[f32::INFINITY; W]; 3],
+        max: [[f32::NEG_INFINITY; W]; 3],
+        child: [EMPTY; W],
     };
 }
 
@@ -63,12 +80,12 @@ pub fn leaf_parts(r: ChildRef) -> (usize, usize) {
     )
 }
 
-/// A 4-wide BVH over a scene's bounded primitives (planes are tested beside it).
+/// A `W`-wide BVH over a scene's bounded primitives (planes are tested beside it).
 #[derive(Clone, Debug)]
-pub struct Bvh4<'a> {
+pub struct WideBvh<'a, const W: usize> {
     prims: Prims<'a>,
     /// Nodes in depth-first order, the root first.
-    pub nodes: Vec<Node4>,
+    pub nodes: Vec<Node<W>>,
     /// Primitive ids in leaf order (each leaf's primitives are contiguous).
     pub ids: Vec<u32>,
     /// Triangle leaves' blocks, four triangles each in SoA form.
@@ -77,10 +94,18 @@ pub struct Bvh4<'a> {
     pub root: ChildRef,
     /// The box around everything.
     pub bounds: Aabb,
+    /// The slab test's instruction set, chosen at build time from the CPU.
+    simd: Simd,
 }
 
-impl<'a> Bvh4<'a> {
-    /// Builds a binned-SAH BVH2 and collapses it. Scenes beyond [`MAX_PRIMS`] primitives have no BVH4.
+/// The 4-wide BVH (the default accelerator; it also has the packet kernel).
+pub type Bvh4<'a> = WideBvh<'a, 4>;
+/// The 8-wide BVH.
+pub type Bvh8<'a> = WideBvh<'a, 8>;
+
+impl<'a, const W: usize> WideBvh<'a, W> {
+    /// Builds a binned-SAH BVH2 and collapses it. Scenes beyond [`MAX_PRIMS`] primitives have no wide
+    /// BVH.
     pub fn new(prims: Prims<'a>, bins: usize) -> Option<Self> {
         if prims.bounded() > MAX_PRIMS {
             return None;
@@ -90,19 +115,35 @@ impl<'a> Bvh4<'a> {
 
     /// Collapses a BVH2 (whose leaves hold one kind, at most 15 primitives each).
     pub fn from_bvh2(bvh2: Bvh2<'a>) -> Self {
-        let c = collapse::collapse(&bvh2.nodes, &bvh2.ids, bvh2.prims());
-        Bvh4 {
+        let c = collapse::collapse::<W>(&bvh2.nodes, &bvh2.ids, bvh2.prims());
+        WideBvh {
             prims: *bvh2.prims(),
             nodes: c.nodes,
             ids: bvh2.ids,
             tris: c.tris,
             root: c.root,
             bounds: bvh2.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds),
+            simd: Simd::detect(),
         }
     }
 
+    /// The instruction set the slab tests use.
+    pub fn simd(&self) -> Simd {
+        self.simd
+    }
+
+    /// Uses `simd` for the slab tests (tests and benchmarks compare the paths); one the CPU lacks is
+    /// refused and the current one kept.
+    pub fn set_simd(&mut self, simd: Simd) -> bool {
+        let ok = simd.available();
+        if ok {
+            self.simd = simd;
+        }
+        ok
+    }
+
     /// The box of child slot `k` of node `n`.
-    pub fn child_bounds(n: &Node4, k: usize) -> Aabb {
+    pub fn child_bounds(n: &Node<W>, k: usize) -> Aabb {
         Aabb::new(
             Vec3::new(n.min[0][k], n.min[1][k], n.min[2][k]),
             Vec3::new(n.max[0][k], n.max[1][k], n.max[2][k]),
@@ -131,7 +172,7 @@ impl<'a> Bvh4<'a> {
             }
             s.sah += bvh2::TRAVERSAL_COST as f64 * rel;
             let n = &self.nodes[r as usize];
-            for k in 0..4 {
+            for k in 0..W {
                 let area = Self::child_bounds(n, k).area() as f64;
                 stack.push((n.child[k], area / root_area, depth + 1));
             }
