@@ -41,6 +41,7 @@ pub mod error;
 pub mod geometry;
 pub mod render;
 pub mod scene;
+pub mod view;
 pub mod workload;
 
 pub use error::{Error, Result};

@@ -5,6 +5,7 @@ mod bench;
 mod info;
 mod merge;
 mod render;
+mod view;
 
 use std::process::ExitCode;
 
@@ -29,6 +30,9 @@ enum Command {
     /// Merge the .partial files of a frame rendered in parts (render --tiles / --passes-range) into one
     /// image, after checking that they belong together and cover every pixel and pass exactly once.
     Merge(merge::MergeArgs),
+    /// Open a window on a scene (the built-in default scene if none is given), rendered as the camera
+    /// moves and refined while it stands still (`whitted view --help` lists the keys).
+    View(view::ViewArgs),
 }
 
 /// The BVH2 builder, as a command-line value.
@@ -57,6 +61,7 @@ pub fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Merge(args) => merge::run(&args),
+        Command::View(args) => view::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,6 +1,7 @@
 //! What a ray that leaves the scene sees: a cube-map skybox (`env DIR`) or the background colour.
 
 use std::path::Path;
+use std::sync::Arc;
 
 use glam::Vec3;
 
@@ -70,11 +71,12 @@ impl CubeMap {
     }
 }
 
-/// The background: a skybox if the scene has one that loads, else a flat colour.
+/// The background: a skybox if the scene has one that loads, else a flat colour. A clone shares the
+/// skybox's images, so that a renderer per camera (the viewer's) does not copy or reload them.
 #[derive(Clone, Debug)]
 pub struct Background {
     color: Vec3,
-    sky: Option<CubeMap>,
+    sky: Option<Arc<CubeMap>>,
 }
 
 impl Background {
@@ -87,7 +89,7 @@ impl Background {
     pub fn sky(color: Vec3, sky: CubeMap) -> Self {
         Background {
             color,
-            sky: Some(sky),
+            sky: Some(Arc::new(sky)),
         }
     }
 

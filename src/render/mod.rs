@@ -25,7 +25,7 @@ use rayon::prelude::*;
 
 use crate::accel::{Accel, Prims};
 use crate::geometry::ray::Ray;
-use crate::scene::{QuadLight, Scene};
+use crate::scene::{Camera, QuadLight, Scene};
 use camera::RayCamera;
 use env::{Background, CubeMap};
 use film::Film;
@@ -127,6 +127,39 @@ impl<'a> Renderer<'a> {
             // A missing directory was reported by the loader already.
             _ => Background::color(scene.background),
         };
+        Self::assemble(scene, accel, options, &scene.camera, background, warnings)
+    }
+
+    /// A renderer of the same scene and background, seen through `camera` instead of the scene's, with
+    /// `accel` and `options`: for a viewer that renders again at every camera move or change of
+    /// setting, without reading the skybox from disk each time as [`Renderer::new`] does (the clone
+    /// shares its images). `accel` may live shorter than `self`. Its warnings are about `options` and
+    /// `camera` only.
+    pub fn with_view<'b>(&self, camera: &Camera, accel: &'b Accel<'b>, options: Options) -> Renderer<'b>
+    where
+        'a: 'b,
+    {
+        let background = self.background.clone();
+        Renderer::assemble(self.scene, accel, options, camera, background, Vec::new())
+    }
+
+    /// Quad lights as their regular grids of point lights whatever the samples per pixel, as at spp 0:
+    /// hard-edged, banded shadows without noise (the viewer's soft-shadow switch).
+    pub fn with_regular_lights(mut self) -> Self {
+        self.fixed_lights = light::regular_samples(self.scene);
+        self.quads = &[];
+        self
+    }
+
+    /// The renderer of `scene` through `camera`, with the background loaded and the warnings so far.
+    fn assemble(
+        scene: &'a Scene,
+        accel: &'a Accel<'a>,
+        options: Options,
+        camera: &Camera,
+        background: Background,
+        mut warnings: Vec<String>,
+    ) -> Self {
         let side = (options.spp as f64).sqrt().ceil() as u32;
         if side * side != options.spp {
             warnings.push(format!(
@@ -135,13 +168,13 @@ impl<'a> Renderer<'a> {
                 side * side
             ));
         }
-        if side == 0 && scene.camera.aperture > 0.0 {
+        if side == 0 && camera.aperture > 0.0 {
             warnings.push(
                 "depth of field needs samples (spp 1 or more): rendering through a pinhole".to_string(),
             );
         }
         // At spp 0 the camera rays go through the pixel centres from the eye (a pinhole).
-        let camera = RayCamera::new(&scene.camera, options.width, options.height);
+        let camera = RayCamera::new(camera, options.width, options.height);
         let (fixed_lights, quads) = if side == 0 {
             (light::regular_samples(scene), &[][..])
         } else {

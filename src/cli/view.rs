@@ -1,0 +1,69 @@
+//! `whitted view`: a window on a scene, rendered with `render`'s kernels as the camera moves.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use whitted::render::Options;
+use whitted::view::{self, Config, state::MAX_DEPTH};
+
+use super::render::{FrameArgs, load_scene, resolution, thread_pool};
+
+/// Arguments of `whitted view`.
+#[derive(Args)]
+#[command(after_help = "\
+Keys: W/A/S/D/Q/E move (forward, left, back, right, down, up); arrow keys turn; drag with the left \
+button to orbit the point looked at; the wheel zooms (field of view); R returns to the file's camera. \
+1-5: accelerator none/grid/bvh2/bvh4/bvh8; K: single/packet kernel; H: soft shadows; F: depth of field; \
+[ and ]: fewer/more bounces; P: progressive refinement; F12 or Ctrl-S: save the image; Escape: quit.")]
+pub struct ViewArgs {
+    /// The scene (.p3f, .nff, .ply, .obj, optionally .gz); the built-in default scene if omitted.
+    scene: Option<PathBuf>,
+    #[command(flatten)]
+    frame: FrameArgs,
+    /// Most bounces after the primary hit, to begin with ([ and ] change it).
+    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(0..=MAX_DEPTH as i64))]
+    max_depth: u32,
+    /// Show and save the image sRGB-encoded (default: linear values, as `render` writes them).
+    #[arg(long)]
+    srgb: bool,
+    /// Close the window after this many frames (for scripted checks; a still camera's frames are its
+    /// passes, so the last is `render --passes N`'s image).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    frames: Option<u32>,
+    /// With --frames: save the last frame to this image (.png, .ppm or .exr).
+    #[arg(long, requires = "frames")]
+    screenshot: Option<PathBuf>,
+}
+
+/// Opens the window.
+pub fn run(args: &ViewArgs) -> whitted::Result<()> {
+    let scene = load_scene(args.scene.as_deref())?;
+    for w in &scene.warnings {
+        eprintln!("whitted: warning: {w}");
+    }
+    let (width, height) = resolution(&scene, args.frame.width, args.frame.height)?;
+    let pool = thread_pool(args.frame.threads)?;
+    let name = match &args.scene {
+        Some(path) => path
+            .file_name()
+            .unwrap_or_default()
+            .to_string_lossy()
+            .into_owned(),
+        None => "default.p3f".to_string(),
+    };
+    let config = Config {
+        name,
+        options: Options {
+            width,
+            height,
+            max_depth: args.max_depth,
+            kernel: args.frame.kernel,
+            ..Options::new(&scene)
+        },
+        accel: args.frame.accel,
+        srgb: args.srgb,
+        frames: args.frames,
+        screenshot: args.screenshot.clone(),
+    };
+    view::run(&scene, &pool, &config)
+}

@@ -1,0 +1,263 @@
+//! The interactive viewer (`whitted view`): a window on the scene, drawn by the same renderer as
+//! `whitted render`, that moves with the keyboard and mouse.
+//!
+//! Three parts, one way: [`state`] turns input events and elapsed time into a [`state::Job`], the full
+//! description of the image to draw (no window involved, so it is unit tested); the render thread here
+//! (`render_loop`) renders jobs on the rayon pool, pass after pass, and hands back finished frames;
+//! [`window`] owns the window and the event loop, feeds the input to the state, sends the jobs and
+//! shows the frames. The event loop never waits on a render.
+//!
+//! While the camera moves each frame is one pass of one jittered sample per pixel (spp 1, the
+//! renderer's progressive pass), at a resolution lowered while frames are slower than 20 fps. Once it
+//! stands still, passes 1, 2, 3, ... of the full-resolution image accumulate into their running mean,
+//! exactly as `whitted render --passes N` averages them: the image after N passes is that render's.
+
+pub mod state;
+pub mod window;
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, TryRecvError};
+use std::time::Instant;
+
+use glam::Vec3;
+use rayon::ThreadPool;
+
+use crate::accel::{Accel, AccelKind, Prims};
+use crate::render::film::{Film, to_u8};
+use crate::render::progressive::Progressive;
+use crate::render::shade::RayCounts;
+use crate::render::{Options, Renderer};
+use crate::scene::Scene;
+use state::{Accumulator, Job};
+
+pub use window::run;
+
+/// How the viewer starts.
+#[derive(Clone, Debug)]
+pub struct Config {
+    /// The scene's name in the window title and in the names of saved images.
+    pub name: String,
+    /// The window's size, the bounce limit, the kernel, the seed and the roughness.
+    pub options: Options,
+    /// The first acceleration structure.
+    pub accel: AccelKind,
+    /// Show and save the image sRGB-encoded (else linear values, as `render` writes them).
+    pub srgb: bool,
+    /// Close the window after this many frames (for scripted checks).
+    pub frames: Option<u32>,
+    /// With `frames`: write the last frame here (.png, .ppm or .exr).
+    pub screenshot: Option<PathBuf>,
+}
+
+/// A finished frame, from the render thread to the window.
+#[derive(Debug)]
+pub(crate) struct Frame {
+    /// What it shows.
+    job: Job,
+    /// Passes averaged in it.
+    pass: u32,
+    /// The running mean, linear.
+    film: Film,
+    /// The same as `0x00RRGGBB` words, as the window takes them.
+    pixels: Vec<u32>,
+    /// Seconds the last pass took.
+    seconds: f64,
+    /// Rays the last pass traced.
+    rays: RayCounts,
+}
+
+/// What the window tells the render thread besides the jobs: which renders in progress are not wanted
+/// any more. A pass stops at the next tile once its flag is raised (see [`Renderer::render_pass`]).
+#[derive(Debug, Default)]
+pub(crate) struct Signals {
+    /// Raised with every new job, and to quit: stops the passes of a still camera, whose image has
+    /// changed.
+    changed: AtomicBool,
+    /// Raised with a job of other settings (accelerator, size, ...), and to quit: stops a moving
+    /// camera's frame too. A camera move alone lets a moving frame finish, so that motion keeps showing
+    /// frames however slow they are.
+    settings: AtomicBool,
+}
+
+impl Signals {
+    /// A new job was sent; `settings` if its settings differ from the last one's.
+    fn raise(&self, settings: bool) {
+        self.changed.store(true, Ordering::SeqCst);
+        if settings {
+            self.settings.store(true, Ordering::SeqCst);
+        }
+    }
+
+    /// Lowered before the render thread looks for the newest job, so that anything sent after that
+    /// look stops the pass that follows it.
+    fn lower(&self) {
+        self.changed.store(false, Ordering::SeqCst);
+        self.settings.store(false, Ordering::SeqCst);
+    }
+}
+
+/// The render thread: renders the newest of `jobs` on `pool`, pass after pass as
+/// [`Accumulator::next`] says, and hands each finished frame to `deliver`, until the sender hangs up
+/// or `deliver` returns false (the window is gone). Waits for a job while there is nothing to render.
+pub(crate) fn render_loop(
+    scene: &Scene,
+    pool: &ThreadPool,
+    jobs: &Receiver<Job>,
+    signals: &Signals,
+    srgb: bool,
+    mut deliver: impl FnMut(Frame) -> bool,
+) {
+    // The renderer that reads the skybox, once; the frames' renderers share its background. Its own
+    // structure, brute force (free to build), is never traced.
+    let brute = Accel::build(Prims::new(scene), AccelKind::None);
+    let mut first: Option<Renderer> = None;
+    // Each structure is built the first time it is asked for and kept, so switching back is instant.
+    let mut built: Vec<(AccelKind, Accel)> = Vec::new();
+    let mut acc = Accumulator::default();
+    let mut sums = Progressive::new(1, 1);
+    let Ok(mut job) = jobs.recv() else { return };
+    loop {
+        signals.lower();
+        loop {
+            match jobs.try_recv() {
+                Ok(newer) => job = newer,
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => return,
+            }
+        }
+        let Some(pass) = acc.next(&job) else {
+            match jobs.recv() {
+                Ok(newer) => {
+                    job = newer;
+                    continue;
+                }
+                Err(_) => return,
+            }
+        };
+        let loaded = first.get_or_insert_with(|| {
+            let renderer = Renderer::new(scene, &brute, job.options);
+            for w in &renderer.warnings {
+                eprintln!("whitted: warning: {w}");
+            }
+            renderer
+        });
+        let slot = match built.iter().position(|(kind, _)| *kind == job.accel) {
+            Some(slot) => slot,
+            None => {
+                let accel = pool.install(|| Accel::build(Prims::new(scene), job.accel));
+                built.push((job.accel, accel));
+                built.len() - 1
+            }
+        };
+        let mut renderer = loaded.with_view(&job.camera, &built[slot].1, job.options);
+        if !job.soft_shadows {
+            renderer = renderer.with_regular_lights();
+        }
+        if pass == 1 {
+            sums = Progressive::new(job.options.width, job.options.height);
+        }
+        let stop = if job.moving {
+            &signals.settings
+        } else {
+            &signals.changed
+        };
+        let start = Instant::now();
+        let Some(rays) = pool.install(|| sums.render_pass(&renderer, pass, &|| {}, stop)) else {
+            continue;
+        };
+        let seconds = start.elapsed().as_secs_f64();
+        acc.done(pass);
+        let film = sums.film();
+        let pixels = film.pixels.iter().map(|&c| word(c, srgb)).collect();
+        let frame = Frame {
+            job,
+            pass,
+            film,
+            pixels,
+            seconds,
+            rays,
+        };
+        if !deliver(frame) {
+            return;
+        }
+    }
+}
+
+/// A linear colour as the window's `0x00RRGGBB` word, rounded as the saved image is.
+fn word(c: Vec3, srgb: bool) -> u32 {
+    let [r, g, b] = [c.x, c.y, c.z].map(|v| u32::from(to_u8(v, srgb)));
+    (r << 16) | (g << 8) | b
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::mpsc;
+
+    use super::*;
+    use crate::render::Kernel;
+    use state::{Input, Key, Settings, ViewState};
+
+    #[test]
+    fn words_are_the_saved_bytes() {
+        assert_eq!(word(Vec3::new(1.0, 0.5, 0.0), false), 0x00ff_8000);
+        assert_eq!(word(Vec3::new(2.0, -1.0, f32::NAN), false), 0x00ff_0000);
+        assert_eq!(word(Vec3::splat(0.5), true), 0x00bc_bcbc);
+    }
+
+    /// The render thread without a window: a still camera's frames are `render --passes`'s passes,
+    /// bit for bit; a new job starts over; hanging up ends the thread.
+    #[test]
+    fn renders_the_passes_of_render_and_starts_over_on_a_change() {
+        let mut scene = crate::scene::load(std::path::Path::new("scenes/balls_low.p3f")).unwrap();
+        // No skybox: the test is about passes, and the renderer falls back on the colour anyway.
+        scene.env = None;
+        let options = Options {
+            width: 40,
+            height: 30,
+            ..Options::new(&scene)
+        };
+        let view = ViewState::new(&scene, options, Settings::new(AccelKind::Bvh4, Kernel::Packet, 6));
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let (send, jobs) = mpsc::channel();
+        let signals = Signals::default();
+        // After three passes the camera turns: pass 1 of a new image, the only pass while it moves;
+        // then the window hangs up, which ends the thread.
+        let turned = {
+            let mut v = view.clone();
+            v.input(Input::Key {
+                key: Key::TurnLeft,
+                pressed: true,
+            });
+            v.tick(0.05);
+            v.job()
+        };
+        send.send(view.job()).unwrap();
+        let mut send = Some(send);
+        let mut frames = Vec::new();
+        render_loop(&scene, &pool, &jobs, &signals, false, |frame| {
+            frames.push(frame);
+            match frames.len() {
+                3 => send.as_ref().unwrap().send(turned).unwrap(),
+                4 => send = None,
+                _ => {}
+            }
+            true
+        });
+        let passes: Vec<_> = frames.iter().map(|f| (f.pass, f.job.moving)).collect();
+        assert_eq!(passes, [(1, false), (2, false), (3, false), (1, true)]);
+        assert_ne!(frames[3].film, frames[0].film);
+
+        let accel = Accel::build(Prims::new(&scene), AccelKind::Bvh4);
+        let renderer = Renderer::new(&scene, &accel, Options { spp: 1, ..options });
+        let mut sums = Progressive::new(40, 30);
+        let never = AtomicBool::new(false);
+        for pass in 1..=3 {
+            sums.render_pass(&renderer, pass, &|| {}, &never).unwrap();
+        }
+        assert_eq!(frames[2].film, sums.film());
+        assert!(frames[2].rays.primary == 1200 && frames[2].seconds > 0.0);
+        let word0 = word(frames[2].film.pixels[0], false);
+        assert_eq!(frames[2].pixels[0], word0);
+    }
+}
