@@ -4,7 +4,8 @@
 //! building or ray generation around it.
 //!
 //! The workload: the 202,520-triangle dragon (`scenes/models/dragon_vrip_res2.ply.gz`) with the
-//! benchmark's camera and light (`shared/bench/dragon-workload.md`) at 320x180, traced by the BVH4;
+//! benchmark's camera and light (`shared/bench/dragon-workload.md`) at 320x180, traced by the BVH4 (and
+//! by the BVH8 for the `-bvh8` loops);
 //! the shading loop renders the course's `scenes/dragon.p3f` at 320x180, Whitted, 1 sample per pixel, on
 //! one thread.
 //!
@@ -25,26 +26,28 @@ use whitted::render::{Options, Renderer};
 use whitted::scene::Scene;
 
 const LOOPS: &str = "closest-primary, closest-diffuse, any-shadow, packet-primary, packet-shadow, \
-                     build-sah, shade";
+                     build-sah, shade, and closest-primary-bvh8, closest-diffuse-bvh8, any-shadow-bvh8";
 const WIDTH: u32 = 320;
 const HEIGHT: u32 = 180;
 
+/// Closest hits of `rays` by `trace` (a wide BVH's kernel, inlined here).
 #[inline(never)]
-fn measured_closest(bvh: &Bvh4, rays: &[Ray]) -> usize {
+fn measured_closest(trace: impl Fn(&Ray, &mut Hit) -> bool, rays: &[Ray]) -> usize {
     let mut hits = 0;
     for ray in rays {
         let mut hit = Hit::miss(f32::INFINITY);
-        hits += bvh.traverse::<Closest>(ray, 0.0, &mut hit) as usize;
+        hits += trace(ray, &mut hit) as usize;
     }
     hits
 }
 
+/// Any hits of the segments `rays` by `trace`.
 #[inline(never)]
-fn measured_any(bvh: &Bvh4, rays: &[(Ray, f32)]) -> usize {
+fn measured_any(trace: impl Fn(&Ray, &mut Hit) -> bool, rays: &[(Ray, f32)]) -> usize {
     let mut hits = 0;
     for (ray, t_max) in rays {
         let mut hit = Hit::miss(*t_max);
-        hits += bvh.traverse::<AnyHit>(ray, 0.0, &mut hit) as usize;
+        hits += trace(ray, &mut hit) as usize;
     }
     hits
 }
@@ -119,11 +122,32 @@ fn run(name: &str) -> Result<(), String> {
         return Err("the dragon did not get a BVH4".into());
     };
     let w = whitted::workload::generate(&scene, &accel, 1);
+    if let Some(base) = name.strip_suffix("-bvh8") {
+        // The BVH8 on the best slab test this CPU (or valgrind's model of it) has.
+        let accel8 = Accel::build(prims, AccelKind::Bvh8);
+        let Accel::Bvh8(bvh8) = &accel8 else {
+            return Err("the dragon did not get a BVH8".into());
+        };
+        eprintln!("bvh8 slab tests: {:?}", bvh8.simd());
+        let closest = |r: &Ray, h: &mut Hit| bvh8.traverse::<Closest>(r, 0.0, h);
+        let any = |r: &Ray, h: &mut Hit| bvh8.traverse::<AnyHit>(r, 0.0, h);
+        let (rays, hits) = match base {
+            "closest-primary" => (w.primary.len(), measured_closest(closest, &w.primary)),
+            "closest-diffuse" => (w.diffuse.len(), measured_closest(closest, &w.diffuse)),
+            "any-shadow" => (w.shadow.len(), measured_any(any, &w.shadow)),
+            _ => return Err(format!("unknown loop \"{name}\": expected one of {LOOPS}")),
+        };
+        println!("rays {rays}");
+        eprintln!("{name}: {hits} of {rays} rays hit");
+        return Ok(());
+    }
+    let closest = |r: &Ray, h: &mut Hit| bvh.traverse::<Closest>(r, 0.0, h);
+    let any = |r: &Ray, h: &mut Hit| bvh.traverse::<AnyHit>(r, 0.0, h);
     let unbounded = |rays: &[Ray]| rays.iter().map(|r| (*r, f32::INFINITY)).collect::<Vec<_>>();
     let (rays, hits) = match name {
-        "closest-primary" => (w.primary.len(), measured_closest(bvh, &w.primary)),
-        "closest-diffuse" => (w.diffuse.len(), measured_closest(bvh, &w.diffuse)),
-        "any-shadow" => (w.shadow.len(), measured_any(bvh, &w.shadow)),
+        "closest-primary" => (w.primary.len(), measured_closest(closest, &w.primary)),
+        "closest-diffuse" => (w.diffuse.len(), measured_closest(closest, &w.diffuse)),
+        "any-shadow" => (w.shadow.len(), measured_any(any, &w.shadow)),
         "packet-primary" => (
             w.primary.len(),
             measured_packets::<false>(bvh, &unbounded(&w.primary)),

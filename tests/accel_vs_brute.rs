@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use whitted::accel::bvh2::Builder;
 use whitted::accel::policy::{AnyHit, Closest};
 use whitted::accel::wide::packet::PACKET;
-use whitted::accel::wide::{Bvh4, Simd};
+use whitted::accel::wide::{Simd, WideBvh};
 use whitted::accel::{Accel, AccelKind, BuildOptions, Hit, Prims};
 use whitted::geometry::ray::Ray;
 use whitted::render::camera::RayCamera;
@@ -165,8 +165,10 @@ fn check(scene: &Scene, cases: &[Case], name: &str) {
         ),
     ];
     for (label, accel) in accels.iter().chain(wide8.iter().flatten()) {
-        if let Accel::Bvh4(bvh) = accel {
-            check_packets(bvh, cases, &reference, &format!("{name}, {label}"));
+        match accel {
+            Accel::Bvh4(bvh) => check_packets(bvh, cases, &reference, &format!("{name}, {label}")),
+            Accel::Bvh8(bvh) => check_packets(bvh, cases, &reference, &format!("{name}, {label}")),
+            _ => {}
         }
         cases
             .par_iter()
@@ -220,7 +222,7 @@ fn check(scene: &Scene, cases: &[Case], name: &str) {
 /// The packet kernel on the same rays, eight at a time (one lane left inactive): the same hits or misses
 /// as brute force at the same `t` (within 1e-5 relative), any hit as "closest hit before t_max". Rays are grouped by `t_min` and sorted by direction octant, so that most packets share their
 /// direction signs (the kernel's coherent path) and the rest mix them.
-fn check_packets(bvh: &Bvh4, cases: &[Case], reference: &[Hit], name: &str) {
+fn check_packets<const W: usize>(bvh: &WideBvh<W>, cases: &[Case], reference: &[Hit], name: &str) {
     let octant = |c: &Case| c.ray.dir.cmplt(Vec3::ZERO).bitmask();
     let mut order: Vec<usize> = (0..cases.len()).collect();
     order.sort_by_key(|&i| (cases[i].t_min.to_bits(), octant(&cases[i]), i));

@@ -57,6 +57,11 @@ fn check(path: &Path) {
         "{}: bvh8 differs from bvh4",
         path.display()
     );
+    assert!(
+        render_with(&scene, AccelKind::Bvh8, 128, Kernel::Packet) == a,
+        "{}: bvh8's packets differ from bvh4",
+        path.display()
+    );
     let size = if is_big(&scene) { 24 } else { 128 };
     let reference = render(&scene, AccelKind::None, size);
     assert_eq!(

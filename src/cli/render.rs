@@ -156,10 +156,11 @@ pub struct FrameArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Acceleration structure: none, grid, bvh2, bvh4 or bvh8 (8-wide nodes, AVX2 where the CPU has it).
-    #[arg(long, default_value = "bvh4")]
+    /// Acceleration structure: none, grid, bvh2, bvh4, bvh8 (8-wide nodes, AVX2 where the CPU has it)
+    /// or auto (bvh8 on CPUs with AVX2, else bvh4).
+    #[arg(long, default_value = "auto")]
     pub accel: AccelKind,
-    /// Camera rays one at a time (single) or in packets of 8 (packet, BVH4 only; same image).
+    /// Camera rays one at a time (single) or in packets of 8 (packet, BVH4 and BVH8; same image).
     #[arg(long, default_value = "packet")]
     pub kernel: Kernel,
 }

@@ -39,7 +39,7 @@ use tiles::{TILE, Tile};
 pub enum Kernel {
     /// One ray at a time.
     Single,
-    /// Camera rays in packets of 8 (4x2 pixels) through the BVH4's packet kernel, and their hits'
+    /// Camera rays in packets of 8 (4x2 pixels) through the wide BVHs' packet kernel, and their hits'
     /// shadow rays in packets per light sample; other accelerators, and the reflected and refracted
     /// rays, go one at a time. The image is identical to `Single`'s.
     Packet,
@@ -340,6 +340,9 @@ impl<'a> Renderer<'a> {
                 let mut rays = RayCounts::default();
                 match (self.options.kernel, self.accel) {
                     (Kernel::Packet, Accel::Bvh4(bvh)) => {
+                        self.tile_packets(bvh, tile, pass, &mut buf, &mut rays)
+                    }
+                    (Kernel::Packet, Accel::Bvh8(bvh)) => {
                         self.tile_packets(bvh, tile, pass, &mut buf, &mut rays)
                     }
                     _ => {

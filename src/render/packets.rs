@@ -14,7 +14,7 @@ use super::sampler::PixelPattern;
 use super::shade::{Bounces, PixelSample, RayCounts, ShadowRay};
 use super::tiles::{TILE, Tile};
 use crate::accel::policy::{AnyHit, Closest};
-use crate::accel::wide::Bvh4;
+use crate::accel::wide::WideBvh;
 use crate::accel::wide::packet::{PACKET, lanes};
 use crate::accel::{Hit, Surface};
 use crate::geometry::ray::Ray;
@@ -27,8 +27,8 @@ const PACKET_LIGHTS: usize = 64;
 /// one ray as for eight.
 const MIN_LANES: u32 = 2;
 
-/// Packet width in pixels (and `PACKET / W` rows).
-const W: u32 = 4;
+/// Packet width in pixels (and `PACKET / PACKET_W` rows).
+const PACKET_W: u32 = 4;
 
 /// A packet's rays, the mask of lanes in use, and the colours they see.
 type Lanes<T> = [T; PACKET];
@@ -37,19 +37,19 @@ impl Renderer<'_> {
     /// Shades `tile` for pass `pass`, packet by packet (pixels outside the image are inactive lanes),
     /// into `buf`: sample `s` of eight pixels at a time, each lane with its pixel's own pattern and
     /// random numbers, summed per pixel in sample order as the single-ray path sums them.
-    pub(super) fn tile_packets(
+    pub(super) fn tile_packets<const W: usize>(
         &self,
-        bvh: &Bvh4,
+        bvh: &WideBvh<W>,
         tile: Tile,
         pass: u32,
         buf: &mut [Vec3; (TILE * TILE) as usize],
         rays_traced: &mut RayCounts,
     ) {
-        let h = PACKET as u32 / W;
+        let h = PACKET as u32 / PACKET_W;
         let mut patterns: Lanes<PixelPattern> = Default::default();
         for y0 in (tile.y0..tile.y1).step_by(h as usize) {
-            for x0 in (tile.x0..tile.x1).step_by(W as usize) {
-                let pixel = |k: usize| (x0 + k as u32 % W, y0 + k as u32 / W);
+            for x0 in (tile.x0..tile.x1).step_by(PACKET_W as usize) {
+                let pixel = |k: usize| (x0 + k as u32 % PACKET_W, y0 + k as u32 / PACKET_W);
                 let mut active = 0u8;
                 for (k, pattern) in patterns.iter_mut().enumerate() {
                     let (x, y) = pixel(k);
@@ -89,9 +89,9 @@ impl Renderer<'_> {
     /// the closest hits as a packet, then their shadow rays and secondary rays as packets. Each lane
     /// draws its random numbers from its own sample, in the order the single-ray path draws them (its
     /// bounce here, then its refracted ray's tree, then its reflected ray's).
-    fn shade_packet(
+    fn shade_packet<const W: usize>(
         &self,
-        bvh: &Bvh4,
+        bvh: &WideBvh<W>,
         rays: &Lanes<Ray>,
         active: u8,
         depth: u32,
@@ -151,9 +151,9 @@ impl Renderer<'_> {
     /// [`shade_packet`](Self::shade_packet), or ray by ray when too few lanes are live to share nodes
     /// or their directions point into different octants (rays off a curved mirror, say), which share
     /// few nodes: measured 2.5% faster on `dragon.p3f` than packets of any such rays.
-    fn trace_lanes(
+    fn trace_lanes<const W: usize>(
         &self,
-        bvh: &Bvh4,
+        bvh: &WideBvh<W>,
         rays: &Lanes<Ray>,
         mask: u8,
         depth: u32,
@@ -178,9 +178,9 @@ impl Renderer<'_> {
     /// Traces the shadow rays of a packet's hits, one packet per light sample (the first
     /// [`PACKET_LIGHTS`]; lane `k` aims at its own sample's light `i`): bit `i` of lane `k` says whether
     /// light sample `i` is blocked from hit `k`.
-    fn shadow_packets(
+    fn shadow_packets<const W: usize>(
         &self,
-        bvh: &Bvh4,
+        bvh: &WideBvh<W>,
         surfaces: &Lanes<Option<Surface>>,
         samples: &mut Lanes<PixelSample>,
     ) -> Lanes<u64> {

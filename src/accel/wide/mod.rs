@@ -35,12 +35,10 @@ pub const TRIANGLES: u32 = 1 << 30;
 pub const COUNT_BITS: u32 = 4;
 /// An unused child slot (its box is inverted, so no ray ever enters it).
 pub const EMPTY: ChildRef = u32::MAX;
-/// Traversal stack depth of the BVH4's packets: a node pushes at most four children and pops one, so
-/// three entries per level of a tree no deeper than the BVH2 it was collapsed from.
-const STACK: usize = 3 * bvh2::MAX_DEPTH + 1;
-/// Single-ray traversal stack depth, for any width up to 8 (seven entries per level; the stack is not
-/// cleared, so its size costs nothing but address space).
-const STACK_WIDE: usize = 7 * bvh2::MAX_DEPTH + 1;
+/// Traversal stack depth (single rays and packets), for any width up to 8: a node pushes at most
+/// eight children and pops one, so seven entries per level of a tree no deeper than the BVH2 it was
+/// collapsed from. The stack is not cleared (`Stack`), so its size costs only address space.
+const STACK: usize = 7 * bvh2::MAX_DEPTH + 1;
 /// The most primitives a BVH4 can index: what fits a leaf reference's start beside its count.
 pub const MAX_PRIMS: u32 = 1 << (30 - COUNT_BITS);
 

@@ -1,5 +1,5 @@
 //! The packet kernel: eight coherent rays (a tile's primary rays, or the shadow rays of their hits)
-//! traced through the BVH4 together, for closest or any hit.
+//! traced through a wide BVH (either width) together, for closest or any hit.
 //!
 //! I. Wald, P. Slusallek, C. Benthin, M. Wagner, "Interactive Rendering with Coherent Ray Tracing",
 //! *Computer Graphics Forum* 20(3), 2001: rays that start together and point alike visit nearly the same
@@ -12,7 +12,8 @@
 //! carrying the mask of rays that entered it and their entry distances; a ray leaves an entry once it
 //! has a hit nearer than its entry, and an entry no ray is left in is skipped.
 //!
-//! What is SIMD over the rays: every child box test (four boxes, one at a time, against the eight lanes).
+//! What is SIMD over the rays: every child box test (the node's boxes one at a time, against the eight
+//! lanes).
 //! What goes ray by ray: the leaves, each active ray through the same code as the single-ray kernel
 //! (triangles four at a time in their [`Tri4`](super::tri4::Tri4) blocks, other kinds one by one), and the
 //! planes beside the hierarchy. Testing one triangle against the eight lanes instead (bit-identical
@@ -20,7 +21,7 @@
 //! does the per-ray blocks' arithmetic plus fetching each triangle from the scene's arrays (the blocks
 //! keep their lanes private), and even with AVX2 the per-ray blocks were faster on the dragon.
 //!
-//! The answers are the single-ray kernel's ([`Bvh4::traverse`]): the per-lane box arithmetic is its
+//! The answers are the single-ray kernel's ([`super::Bvh4::traverse`]): the per-lane box arithmetic is its
 //! operation for operation (the near/far blend by each ray's own direction signs, [`SLAB_ROBUST`] on the
 //! exit, [`CULL_MARGIN`] on the hit), so a ray is never kept out of a box the single-ray kernel would
 //! enter for it, and each leaf runs the single-ray kernel's leaf code, so hits, and ties inside a leaf, come
@@ -29,7 +30,7 @@
 
 use wide::f32x8;
 
-use super::{Bvh4, ChildRef, EMPTY, LEAF, Node4, STACK, TRIANGLES, leaf_parts};
+use super::{ChildRef, EMPTY, LEAF, Node, STACK, TRIANGLES, WideBvh, leaf_parts};
 use crate::accel::policy::HitPolicy;
 use crate::accel::prims::Hit;
 use crate::accel::stack::Stack;
@@ -88,7 +89,7 @@ impl Packet {
     /// [`SLAB_ROBUST`] on the exit distance. The min/max ordering of mixed packets gives the same planes
     /// as ordering by sign for any box that is not inverted, and inverted (empty) slots are never tested.
     #[inline(always)]
-    fn slab8(&self, n: &Node4, c: usize, t_min: f32x8, t_max: f32x8) -> (f32x8, u32) {
+    fn slab8<const W: usize>(&self, n: &Node<W>, c: usize, t_min: f32x8, t_max: f32x8) -> (f32x8, u32) {
         let mut near = t_min;
         let mut far = f32x8::splat(f32::INFINITY);
         for axis in 0..3 {
@@ -124,7 +125,7 @@ fn limits(hits: &[Hit; PACKET]) -> f32x8 {
     f32x8::new(std::array::from_fn(|k| hits[k].t))
 }
 
-impl Bvh4<'_> {
+impl<const W: usize> WideBvh<'_, W> {
     /// Tests leaf `r` for each ray in `mask` exactly as the single-ray kernel's leaf does (triangles four
     /// at a time in their blocks, in order, a hit kept only when strictly nearer; other kinds one by one;
     /// any-hit stops a ray at its first hit). Returns the mask of rays that hit.
@@ -176,7 +177,7 @@ impl Bvh4<'_> {
     /// for any hit the same hit-or-miss (perhaps through a different primitive). Inactive rays' hits are
     /// left as they are. Meant for coherent rays; incoherent ones get the right answers, slowly.
     ///
-    /// Per node, the four child boxes are tested against the rays of the entry's mask; the children any
+    /// Per node, the `W` child boxes are tested against the rays of the entry's mask; the children any
     /// of them enters are pushed with the mask of those rays and their entry distances, for closest hit
     /// in far-to-near order of the first such ray's entry (Wald et al. 2001), so that for a coherent
     /// packet every ray meets its nearest hit early and culls the rest. A popped entry keeps the rays
@@ -225,8 +226,8 @@ impl Bvh4<'_> {
                 let node = &self.nodes[current as usize];
                 let t_max = t_hit * margin;
                 let start = stack.len();
-                let mut keys = [0f32; 4];
-                for c in 0..4 {
+                let mut keys = [0f32; 8];
+                for c in 0..W {
                     if node.child[c] == EMPTY {
                         continue;
                     }
@@ -273,8 +274,8 @@ impl Bvh4<'_> {
     }
 }
 
-/// Orders the entries one node pushed (2 to 4, with their sort `keys`) far to near, so that the nearest
-/// is popped first (insertion sort: at most six compares).
+/// Orders the entries one node pushed (2 to `W`, with their sort `keys`) far to near, so that the
+/// nearest is popped first (insertion sort: at most six compares for four).
 #[inline(always)]
 fn sort_far_to_near(keys: &mut [f32], run: &mut [Entry]) {
     for i in 1..keys.len() {
@@ -295,6 +296,7 @@ mod tests {
 
     use super::*;
     use crate::accel::policy::{AnyHit, Closest};
+    use crate::accel::wide::Bvh4;
     use crate::accel::prims::Prims;
     use crate::geometry::ray::testing::TestRng;
     use crate::render::camera::RayCamera;

@@ -10,7 +10,7 @@
 #[cfg(target_arch = "x86_64")]
 use super::slab::Avx8;
 use super::slab::{Lanes, Portable8, Simd, Sse4};
-use super::{Bvh4, Bvh8, ChildRef, EMPTY, LEAF, STACK_WIDE, TRIANGLES, WideBvh, leaf_parts};
+use super::{Bvh4, Bvh8, ChildRef, EMPTY, LEAF, STACK, TRIANGLES, WideBvh, leaf_parts};
 use crate::accel::policy::HitPolicy;
 use crate::accel::prims::Hit;
 use crate::accel::stack::Stack;
@@ -90,7 +90,7 @@ impl<const W: usize> WideBvh<'_, W> {
             return found;
         }
         let r = L::prepare(ray);
-        let mut stack = Stack::<(ChildRef, f32), STACK_WIDE>::new();
+        let mut stack = Stack::<(ChildRef, f32), STACK>::new();
         let mut current = self.root;
         loop {
             if current & LEAF != 0 {
