@@ -101,21 +101,49 @@ impl<const W: usize> WideBvh<'_, W> {
                 let node = &self.nodes[current as usize];
                 let (t, mut mask) = L::slab(node, &r, t_min, hit.t * CULL_MARGIN);
                 if mask != 0 {
-                    if mask.count_ones() == 1 {
-                        current = node.child[mask.trailing_zeros() as usize];
+                    let first = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        current = node.child[first];
                         continue;
                     }
-                    // Push the hit children, then order the pushed run far-to-near so the nearest is popped
-                    // first (any-hit keeps the order it found).
+                    if P::ANY {
+                        // Any order will do: descend into the first, keep the others for later.
+                        while mask != 0 {
+                            let k = mask.trailing_zeros() as usize;
+                            mask &= mask - 1;
+                            stack.push((node.child[k], t[k]));
+                        }
+                        current = node.child[first];
+                        continue;
+                    }
+                    let second = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        // Two children, the commonest case: keep the farther, descend into the nearer
+                        // (on a tie the second, as the sort below would), with no sort and no pop.
+                        let (near, far) = if t[first] < t[second] {
+                            (first, second)
+                        } else {
+                            (second, first)
+                        };
+                        stack.push((node.child[far], t[far]));
+                        current = node.child[near];
+                        continue;
+                    }
+                    // Three or more: push them, order the run far to near, descend into the nearest
+                    // (its entry was just tested against the hit so far).
                     let start = stack.len();
+                    stack.push((node.child[first], t[first]));
+                    stack.push((node.child[second], t[second]));
                     while mask != 0 {
                         let k = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
                         stack.push((node.child[k], t[k]));
                     }
-                    if !P::ANY {
-                        sort_far_to_near(stack.above_mut(start));
-                    }
+                    sort_far_to_near(stack.above_mut(start));
+                    current = stack.pop().expect("just pushed").0;
+                    continue;
                 }
             }
             // Pop the next subtree that may still hold a closer hit.
