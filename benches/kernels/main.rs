@@ -7,7 +7,8 @@
 //! workload's primary-hit count and Σt, and every structure's hit counts (ours and the peers'), are
 //! checked first: a wrong benchmark measures nothing. At the end, a table of the medians side by side.
 //! With `--features bench-embree`, Embree 3 joins them: single rays and 8-wide packets, on its
-//! high-quality (spatial split) BVH.
+//! high-quality (spatial split) BVH. With `--features bench-tinybvh`, tinybvh's BVH8_CPU (closest hit only:
+//! the shadow rays within the light distance; needs `RUSTFLAGS="-C target-cpu=native"`, `tinybvh.rs`).
 //!
 //! `cargo bench --bench kernels`; `WHITTED_BENCH_QUICK=1` for a smoke run; `WHITTED_BENCH_SCENE` for one
 //! other scene (default: the full dragon, then res2).
@@ -17,6 +18,8 @@ mod common;
 #[cfg(feature = "bench-embree")]
 mod embree;
 mod peer;
+#[cfg(feature = "bench-tinybvh")]
+mod tinybvh;
 
 use std::hint::black_box;
 use std::time::SystemTime;
@@ -25,12 +28,12 @@ use common::{obvhs as obvhs_build, table};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use peer::Traced;
 use rayon::prelude::*;
-#[cfg(feature = "bench-embree")]
+#[cfg(any(feature = "bench-embree", feature = "bench-tinybvh"))]
 use whitted::accel::PrimKind;
 use whitted::accel::bvh2::Builder;
 use whitted::accel::policy::{AnyHit, Closest};
 use whitted::accel::wide::packet::PACKET;
-use whitted::accel::wide::{Bvh4, Simd};
+use whitted::accel::wide::{Simd, WideBvh};
 use whitted::accel::{Accel, AccelKind, BuildOptions, Hit, Prims};
 use whitted::geometry::ray::Ray;
 use whitted::workload::{self, Workload};
@@ -80,7 +83,7 @@ fn packets(rays: &[(Ray, f32)]) -> Packets {
         .collect()
 }
 
-fn packet_hits<const ANY: bool>(bvh: &Bvh4, packets: &[Packet]) -> usize {
+fn packet_hits<const ANY: bool, const W: usize>(bvh: &WideBvh<W>, packets: &[Packet]) -> usize {
     let mut hits = 0;
     for (rays, t_max, active) in packets {
         let mut h = t_max.map(Hit::miss);
@@ -94,7 +97,7 @@ fn packet_hits<const ANY: bool>(bvh: &Bvh4, packets: &[Packet]) -> usize {
     hits
 }
 
-#[cfg(feature = "bench-embree")]
+#[cfg(any(feature = "bench-embree", feature = "bench-tinybvh"))]
 /// Barycentric distance (exact enough: f64) of the point where `ray` crosses the plane of triangle
 /// `[a, b, c]` from the triangle's nearest edge: min(u, v, 1 − u − v), negative outside.
 fn edge_margin(ray: &Ray, [a, b, c]: [glam::Vec3; 3]) -> f64 {
@@ -108,7 +111,7 @@ fn edge_margin(ray: &Ray, [a, b, c]: [glam::Vec3; 3]) -> f64 {
     u.min(v).min(1.0 - u - v)
 }
 
-#[cfg(feature = "bench-embree")]
+#[cfg(any(feature = "bench-embree", feature = "bench-tinybvh"))]
 /// A peer with its own triangle test may round differently from ours on rays that cross within f32
 /// precision of an edge (ours is not watertight, `geometry/triangle.rs`): where the hit counts differ,
 /// every ray on which the peer (`theirs`: the triangle a segment hits first) and we disagree must cross
@@ -225,8 +228,8 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
         );
         assert_eq!(closest(accel, &w.diffuse), hits_diffuse, "{name} diffuse hits");
     }
-    let Accel::Bvh4(bvh4) = &accels[0].1 else {
-        panic!("the bench scene fits a BVH4")
+    let (Accel::Bvh4(bvh4), Accel::Bvh8(bvh8)) = (&accels[0].1, &accels[1].1) else {
+        panic!("the bench scene fits the wide BVHs")
     };
     let unbounded = |rays: &[Ray]| rays.iter().map(|r| (*r, f32::INFINITY)).collect::<Vec<_>>();
     let primary_segments = unbounded(&w.primary);
@@ -234,9 +237,12 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     let primary_packets = packets(&primary_segments);
     let shadow_packets = packets(&w.shadow);
     let diffuse_packets = packets(&diffuse_segments);
-    assert_eq!(packet_hits::<false>(bvh4, &primary_packets), w.primary_hits);
-    assert_eq!(packet_hits::<true>(bvh4, &shadow_packets), hits_shadow);
-    assert_eq!(packet_hits::<false>(bvh4, &diffuse_packets), hits_diffuse);
+    assert_eq!(packet_hits::<false, 4>(bvh4, &primary_packets), w.primary_hits);
+    assert_eq!(packet_hits::<true, 4>(bvh4, &shadow_packets), hits_shadow);
+    assert_eq!(packet_hits::<false, 4>(bvh4, &diffuse_packets), hits_diffuse);
+    assert_eq!(packet_hits::<false, 8>(bvh8, &primary_packets), w.primary_hits);
+    assert_eq!(packet_hits::<true, 8>(bvh8, &shadow_packets), hits_shadow);
+    assert_eq!(packet_hits::<false, 8>(bvh8, &diffuse_packets), hits_diffuse);
 
     // The peers, on their best trees, must find the same hits: a mismatch is a bug on one side.
     let tris = obvhs_build::triangles(&scene);
@@ -287,6 +293,16 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
         }
         e
     };
+    #[cfg(feature = "bench-tinybvh")]
+    let tiny = tinybvh::Tiny::new(&scene).checked(
+        [
+            ("primary", &primary_segments, w.primary_hits),
+            ("shadow", &w.shadow, hits_shadow),
+            ("diffuse", &diffuse_segments, hits_diffuse),
+        ],
+        &accels[0].1,
+        &scene,
+    );
 
     let name = common::scene_name(path);
     let group = format!("kernels-{name}");
@@ -349,8 +365,14 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
         ));
         g.bench_function(format!("bvh4-packet/{set}"), |b| {
             b.iter(|| match any {
-                true => packet_hits::<true>(bvh4, black_box(p)),
-                false => packet_hits::<false>(bvh4, black_box(p)),
+                true => packet_hits::<true, 4>(bvh4, black_box(p)),
+                false => packet_hits::<false, 4>(bvh4, black_box(p)),
+            })
+        });
+        g.bench_function(format!("bvh8-packet/{set}"), |b| {
+            b.iter(|| match any {
+                true => packet_hits::<true, 8>(bvh8, black_box(p)),
+                false => packet_hits::<false, 8>(bvh8, black_box(p)),
             })
         });
     }
@@ -392,6 +414,20 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
             })
         });
     }
+    // tinybvh: closest hit on every set (the shadow rays within the light distance: it has no any hit).
+    #[cfg(feature = "bench-tinybvh")]
+    if let Some(tiny) = &tiny {
+        for (set, rays, n) in [
+            ("primary", &primary_segments, n_primary),
+            ("shadow-any", &w.shadow, n_shadow),
+            ("diffuse", &diffuse_segments, n_diffuse),
+        ] {
+            g.throughput(Throughput::Elements(n));
+            g.bench_function(format!("{}/{set}", tinybvh::ID), |b| {
+                b.iter(|| tiny.closest(black_box(rays)))
+            });
+        }
+    }
 
     // All threads: the same work split in chunks of 256 rays (32 packets) across rayon's pool.
     let all = rayon::current_num_threads();
@@ -411,21 +447,21 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     }
     g.throughput(Throughput::Elements(n_primary));
     g.bench_function(format!("bvh4-packet/primary/{all}-threads"), |b| {
-        b.iter(|| par(black_box(&primary_packets), |p| packet_hits::<false>(bvh4, p)))
+        b.iter(|| par(black_box(&primary_packets), |p| packet_hits::<false, 4>(bvh4, p)))
     });
     g.bench_function(format!("obvhs-cwbvh/primary/{all}-threads"), |b| {
         b.iter(|| par(black_box(&w.primary), |r| cwbvh.closest(r)))
     });
     g.throughput(Throughput::Elements(n_shadow));
     g.bench_function(format!("bvh4-packet/shadow-any/{all}-threads"), |b| {
-        b.iter(|| par(black_box(&shadow_packets), |p| packet_hits::<true>(bvh4, p)))
+        b.iter(|| par(black_box(&shadow_packets), |p| packet_hits::<true, 4>(bvh4, p)))
     });
     g.bench_function(format!("obvhs-cwbvh/shadow-any/{all}-threads"), |b| {
         b.iter(|| par(black_box(&w.shadow), |r| cwbvh.occluded(r)))
     });
     g.throughput(Throughput::Elements(n_diffuse));
     g.bench_function(format!("bvh4-packet/diffuse/{all}-threads"), |b| {
-        b.iter(|| par(black_box(&diffuse_packets), |p| packet_hits::<false>(bvh4, p)))
+        b.iter(|| par(black_box(&diffuse_packets), |p| packet_hits::<false, 4>(bvh4, p)))
     });
     g.bench_function(format!("obvhs-cwbvh/diffuse/{all}-threads"), |b| {
         b.iter(|| par(black_box(&w.diffuse), |r| cwbvh.closest(r)))
@@ -483,6 +519,7 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
         "bvh4",
         "bvh8",
         "bvh4-packet",
+        "bvh8-packet",
         "bvh2-sah",
         "obvhs-cwbvh",
         "obvhs-bvh2",
@@ -490,12 +527,18 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     if cfg!(feature = "bench-embree") {
         columns.extend(["embree", "embree-8"]);
     }
+    #[cfg(feature = "bench-tinybvh")]
+    columns.push(tinybvh::ID);
     let mut header = vec!["rays"];
     header.extend(&columns);
-    header.extend(["best single / best obvhs", "packets / best obvhs"]);
+    header.extend(["best single / best obvhs", "best packets / best obvhs"]);
     if cfg!(feature = "bench-embree") {
-        header.extend(["best single / embree", "packets / embree-8"]);
+        header.extend(["best single / embree", "best packets / embree-8"]);
     }
+    #[cfg(feature = "bench-tinybvh")]
+    let tiny_ratio = format!("best single / {}", tinybvh::ID);
+    #[cfg(feature = "bench-tinybvh")]
+    header.push(&tiny_ratio);
     for threads in [1, all] {
         let suffix = match threads {
             1 => String::new(),
@@ -516,12 +559,18 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
                     .reduce(f64::max);
                 let mut cells: Vec<Option<String>> = v.iter().map(|x| x.map(|x| format!("{x:.2}"))).collect();
                 let single = col("bvh4").into_iter().chain(col("bvh8")).reduce(f64::max);
+                let packets = col("bvh4-packet")
+                    .into_iter()
+                    .chain(col("bvh8-packet"))
+                    .reduce(f64::max);
                 cells.push(ratio(single, obvhs));
-                cells.push(ratio(col("bvh4-packet"), obvhs));
+                cells.push(ratio(packets, obvhs));
                 if cfg!(feature = "bench-embree") {
                     cells.push(ratio(single, col("embree")));
-                    cells.push(ratio(col("bvh4-packet"), col("embree-8")));
+                    cells.push(ratio(packets, col("embree-8")));
                 }
+                #[cfg(feature = "bench-tinybvh")]
+                cells.push(ratio(single, col(tinybvh::ID)));
                 (set.to_string(), cells)
             })
             .collect();
@@ -532,6 +581,11 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
         );
         table::print(&title, &header, &rows);
     }
+    #[cfg(feature = "bench-tinybvh")]
+    println!(
+        "\n{}: its shadow-any is a closest hit within the light distance (tinybvh-rs has no any hit)",
+        tinybvh::ID
+    );
 }
 
 criterion_group!(benches, kernels);

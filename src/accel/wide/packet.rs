@@ -296,8 +296,8 @@ mod tests {
 
     use super::*;
     use crate::accel::policy::{AnyHit, Closest};
-    use crate::accel::wide::Bvh4;
     use crate::accel::prims::Prims;
+    use crate::accel::wide::Bvh4;
     use crate::geometry::ray::testing::TestRng;
     use crate::render::camera::RayCamera;
     use crate::scene::Scene;
