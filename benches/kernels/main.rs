@@ -394,26 +394,6 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     }
     peer!("obvhs-cwbvh", cwbvh);
     peer!("obvhs-bvh2", obvh2);
-    #[cfg(feature = "bench-embree")]
-    for (set, rays, any, n) in [
-        ("primary", &primary_segments, false, n_primary),
-        ("shadow-any", &w.shadow, true, n_shadow),
-        ("diffuse", &diffuse_segments, false, n_diffuse),
-    ] {
-        g.throughput(Throughput::Elements(n));
-        g.bench_function(format!("embree/{set}"), |b| {
-            b.iter(|| match any {
-                true => embree.occluded(black_box(rays)),
-                false => embree.closest(black_box(rays)),
-            })
-        });
-        g.bench_function(format!("embree-8/{set}"), |b| {
-            b.iter(|| match any {
-                true => embree.occluded8(black_box(rays)),
-                false => embree.closest8(black_box(rays)),
-            })
-        });
-    }
     // tinybvh: closest hit on every set (the shadow rays within the light distance: it has no any hit).
     #[cfg(feature = "bench-tinybvh")]
     if let Some(tiny) = &tiny {
@@ -466,25 +446,35 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     g.bench_function(format!("obvhs-cwbvh/diffuse/{all}-threads"), |b| {
         b.iter(|| par(black_box(&w.diffuse), |r| cwbvh.closest(r)))
     });
+    // Embree, single rays and 8-wide packets, on one thread and on all of them.
     #[cfg(feature = "bench-embree")]
-    for (set, rays, any, n) in [
-        ("primary", &primary_segments, false, n_primary),
-        ("shadow-any", &w.shadow, true, n_shadow),
-        ("diffuse", &diffuse_segments, false, n_diffuse),
-    ] {
-        g.throughput(Throughput::Elements(n));
-        g.bench_function(format!("embree/{set}/{all}-threads"), |b| {
-            b.iter(|| match any {
-                true => par(black_box(rays), |r| embree.occluded(r)),
-                false => par(black_box(rays), |r| embree.closest(r)),
-            })
-        });
-        g.bench_function(format!("embree-8/{set}/{all}-threads"), |b| {
-            b.iter(|| match any {
-                true => par(black_box(rays), |r| embree.occluded8(r)),
-                false => par(black_box(rays), |r| embree.closest8(r)),
-            })
-        });
+    for threaded in [false, true] {
+        type Kernel<'k> = &'k (dyn Fn(&[(Ray, f32)]) -> usize + Sync);
+        let suffix = if threaded {
+            format!("/{all}-threads")
+        } else {
+            String::new()
+        };
+        let run = |rays: &[(Ray, f32)], f: Kernel| if threaded { par(rays, f) } else { f(rays) };
+        for (set, rays, any, n) in [
+            ("primary", &primary_segments, false, n_primary),
+            ("shadow-any", &w.shadow, true, n_shadow),
+            ("diffuse", &diffuse_segments, false, n_diffuse),
+        ] {
+            g.throughput(Throughput::Elements(n));
+            g.bench_function(format!("embree/{set}{suffix}"), |b| {
+                b.iter(|| match any {
+                    true => run(black_box(rays), &|r| embree.occluded(r)),
+                    false => run(black_box(rays), &|r| embree.closest(r)),
+                })
+            });
+            g.bench_function(format!("embree-8/{set}{suffix}"), |b| {
+                b.iter(|| match any {
+                    true => run(black_box(rays), &|r| embree.occluded8(r)),
+                    false => run(black_box(rays), &|r| embree.closest8(r)),
+                })
+            });
+        }
     }
     g.finish();
 
