@@ -30,7 +30,7 @@
 
 use wide::f32x8;
 
-use super::{ChildRef, EMPTY, LEAF, Node, STACK, TRIANGLES, WideBvh, leaf_parts};
+use super::{ChildRef, EMPTY, LEAF, Node, STACK, Simd, TRIANGLES, WideBvh, leaf_parts};
 use crate::accel::policy::HitPolicy;
 use crate::accel::prims::Hit;
 use crate::accel::stack::Stack;
@@ -184,6 +184,35 @@ impl<const W: usize> WideBvh<'_, W> {
     /// whose entry is within their hit so far (with [`CULL_MARGIN`], as the single-ray kernel) or, for any
     /// hit, those still without one.
     pub fn traverse_packet<P: HitPolicy>(
+        &self,
+        rays: &[Ray; PACKET],
+        active: u8,
+        t_min: f32,
+        hits: &mut [Hit; PACKET],
+    ) -> u8 {
+        match self.simd {
+            // SAFETY: `simd` is `Avx2` only if the CPU has AVX2 and FMA (`Simd::detect`, `set_simd`).
+            #[cfg(target_arch = "x86_64")]
+            Simd::Avx2 => unsafe { self.traverse_packet_avx2::<P>(rays, active, t_min, hits) },
+            _ => self.packet_with::<P>(rays, active, t_min, hits),
+        }
+    }
+
+    /// The packet kernel compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn traverse_packet_avx2<P: HitPolicy>(
+        &self,
+        rays: &[Ray; PACKET],
+        active: u8,
+        t_min: f32,
+        hits: &mut [Hit; PACKET],
+    ) -> u8 {
+        self.packet_with::<P>(rays, active, t_min, hits)
+    }
+
+    #[inline(always)]
+    fn packet_with<P: HitPolicy>(
         &self,
         rays: &[Ray; PACKET],
         active: u8,
