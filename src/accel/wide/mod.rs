@@ -39,7 +39,7 @@ pub const EMPTY: ChildRef = u32::MAX;
 /// eight children and pops one, so seven entries per level of a tree no deeper than the BVH2 it was
 /// collapsed from. The stack is not cleared (`Stack`), so its size costs only address space.
 const STACK: usize = 7 * bvh2::MAX_DEPTH + 1;
-/// The most primitives a BVH4 can index: what fits a leaf reference's start beside its count.
+/// The most primitives a wide BVH can index: what fits a leaf reference's start beside its count.
 pub const MAX_PRIMS: u32 = 1 << (30 - COUNT_BITS);
 
 /// A node: its `W` children's boxes as component arrays, then their references. Aligned to a 64-byte
@@ -96,7 +96,7 @@ pub struct WideBvh<'a, const W: usize> {
     simd: Simd,
 }
 
-/// The 4-wide BVH (the default accelerator; it also has the packet kernel).
+/// The 4-wide BVH (the default accelerator on CPUs without AVX2).
 pub type Bvh4<'a> = WideBvh<'a, 4>;
 /// The 8-wide BVH.
 pub type Bvh8<'a> = WideBvh<'a, 8>;
