@@ -125,6 +125,71 @@ fn limits(hits: &[Hit; PACKET]) -> f32x8 {
     f32x8::new(std::array::from_fn(|k| hits[k].t))
 }
 
+/// How a packet tests one child box against its eight rays: `wide`'s `f32x8` (two SSE halves in the
+/// default build), or one AVX2 register in the kernel's AVX2 compile. The same operations in the same
+/// order, so both enter exactly the same children.
+trait PacketSlab {
+    fn slab8<const W: usize>(p: &Packet, n: &Node<W>, c: usize, t_min: f32x8, t_max: f32x8) -> (f32x8, u32);
+}
+
+/// `wide`'s lanes: any CPU.
+struct WideLanes;
+
+impl PacketSlab for WideLanes {
+    #[inline(always)]
+    fn slab8<const W: usize>(p: &Packet, n: &Node<W>, c: usize, t_min: f32x8, t_max: f32x8) -> (f32x8, u32) {
+        p.slab8(n, c, t_min, t_max)
+    }
+}
+
+/// One AVX2 register: reached only through [`Simd::Avx2`], chosen only on CPUs with AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+struct Avx2Lanes;
+
+#[cfg(target_arch = "x86_64")]
+impl PacketSlab for Avx2Lanes {
+    #[inline(always)]
+    fn slab8<const W: usize>(p: &Packet, n: &Node<W>, c: usize, t_min: f32x8, t_max: f32x8) -> (f32x8, u32) {
+        // SAFETY: as the type's comment says.
+        unsafe { slab8_avx2(p, n, c, t_min, t_max) }
+    }
+}
+
+/// [`Packet::slab8`] in 256-bit registers.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+#[inline]
+fn slab8_avx2<const W: usize>(p: &Packet, n: &Node<W>, c: usize, t_min: f32x8, t_max: f32x8) -> (f32x8, u32) {
+    use std::arch::x86_64::*;
+    let ld = |v: f32x8| {
+        let a = v.to_array();
+        // SAFETY: an unaligned load of eight floats from an eight-float array.
+        unsafe { _mm256_loadu_ps(a.as_ptr()) }
+    };
+    let mut near = ld(t_min);
+    let mut far = _mm256_set1_ps(f32::INFINITY);
+    for axis in 0..3 {
+        let (a, b) = (n.min[axis][c], n.max[axis][c]);
+        let (a, b) = if p.flip[axis] { (b, a) } else { (a, b) };
+        let (o, inv) = (ld(p.origin[axis]), ld(p.inv[axis]));
+        let t0 = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(a), o), inv);
+        let t1 = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(b), o), inv);
+        if p.mixed {
+            near = _mm256_max_ps(near, _mm256_min_ps(t0, t1));
+            far = _mm256_min_ps(far, _mm256_max_ps(t0, t1));
+        } else {
+            near = _mm256_max_ps(near, t0);
+            far = _mm256_min_ps(far, t1);
+        }
+    }
+    let far = _mm256_min_ps(_mm256_mul_ps(far, _mm256_set1_ps(SLAB_ROBUST)), ld(t_max));
+    let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near, far)) as u32;
+    let mut out = [0.0f32; 8];
+    // SAFETY: an unaligned store of eight floats into an eight-float array.
+    unsafe { _mm256_storeu_ps(out.as_mut_ptr(), near) };
+    (f32x8::new(out), mask)
+}
+
 impl<const W: usize> WideBvh<'_, W> {
     /// Tests leaf `r` for each ray in `mask` exactly as the single-ray kernel's leaf does (triangles four
     /// at a time in their blocks, in order, a hit kept only when strictly nearer; other kinds one by one;
@@ -194,11 +259,11 @@ impl<const W: usize> WideBvh<'_, W> {
             // SAFETY: `simd` is `Avx2` only if the CPU has AVX2 and FMA (`Simd::detect`, `set_simd`).
             #[cfg(target_arch = "x86_64")]
             Simd::Avx2 => unsafe { self.traverse_packet_avx2::<P>(rays, active, t_min, hits) },
-            _ => self.packet_with::<P>(rays, active, t_min, hits),
+            _ => self.packet_with::<P, WideLanes>(rays, active, t_min, hits),
         }
     }
 
-    /// The packet kernel compiled for AVX2.
+    /// The packet kernel compiled for AVX2, with its box tests in 256-bit registers.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn traverse_packet_avx2<P: HitPolicy>(
@@ -208,11 +273,12 @@ impl<const W: usize> WideBvh<'_, W> {
         t_min: f32,
         hits: &mut [Hit; PACKET],
     ) -> u8 {
-        self.packet_with::<P>(rays, active, t_min, hits)
+        self.packet_with::<P, Avx2Lanes>(rays, active, t_min, hits)
     }
 
+    /// The packet kernel's one body, over the box test `S`.
     #[inline(always)]
-    fn packet_with<P: HitPolicy>(
+    fn packet_with<P: HitPolicy, S: PacketSlab>(
         &self,
         rays: &[Ray; PACKET],
         active: u8,
@@ -260,7 +326,7 @@ impl<const W: usize> WideBvh<'_, W> {
                     if node.child[c] == EMPTY {
                         continue;
                     }
-                    let (entry, entered) = p.slab8(node, c, lo, t_max);
+                    let (entry, entered) = S::slab8(&p, node, c, lo, t_max);
                     let entered = entered & mask;
                     if entered != 0 {
                         keys[stack.len() - start] = entry.to_array()[entered.trailing_zeros() as usize];
