@@ -131,30 +131,46 @@ fn run(name: &str) -> Result<(), String> {
         eprintln!("bvh8 slab tests: {:?}", bvh8.simd());
         let closest = |r: &Ray, h: &mut Hit| bvh8.traverse::<Closest>(r, 0.0, h);
         let any = |r: &Ray, h: &mut Hit| bvh8.traverse::<AnyHit>(r, 0.0, h);
-        let (rays, hits) = match base {
-            "closest-primary" => (w.primary.len(), measured_closest(closest, &w.primary)),
-            "closest-diffuse" => (w.diffuse.len(), measured_closest(closest, &w.diffuse)),
-            "any-shadow" => (w.shadow.len(), measured_any(any, &w.shadow)),
-            _ => return Err(format!("unknown loop \"{name}\": expected one of {LOOPS}")),
+        let Some(counts) = single_rays(base, &w, closest, any) else {
+            return Err(format!("unknown loop \"{name}\": expected one of {LOOPS}"));
         };
-        println!("rays {rays}");
-        eprintln!("{name}: {hits} of {rays} rays hit");
-        return Ok(());
+        return report(name, counts);
     }
     let closest = |r: &Ray, h: &mut Hit| bvh.traverse::<Closest>(r, 0.0, h);
     let any = |r: &Ray, h: &mut Hit| bvh.traverse::<AnyHit>(r, 0.0, h);
     let unbounded = |rays: &[Ray]| rays.iter().map(|r| (*r, f32::INFINITY)).collect::<Vec<_>>();
-    let (rays, hits) = match name {
-        "closest-primary" => (w.primary.len(), measured_closest(closest, &w.primary)),
-        "closest-diffuse" => (w.diffuse.len(), measured_closest(closest, &w.diffuse)),
-        "any-shadow" => (w.shadow.len(), measured_any(any, &w.shadow)),
+    let counts = match name {
         "packet-primary" => (
             w.primary.len(),
             measured_packets::<false>(bvh, &unbounded(&w.primary)),
         ),
         "packet-shadow" => (w.shadow.len(), measured_packets::<true>(bvh, &w.shadow)),
-        _ => return Err(format!("unknown loop \"{name}\": expected one of {LOOPS}")),
+        _ => match single_rays(name, &w, closest, any) {
+            Some(counts) => counts,
+            None => return Err(format!("unknown loop \"{name}\": expected one of {LOOPS}")),
+        },
     };
+    report(name, counts)
+}
+
+/// The single-ray loop `name` over the workload `w` with a structure's closest- and any-hit kernels:
+/// `(rays, hits)`, or `None` for a name that is not one.
+fn single_rays(
+    name: &str,
+    w: &whitted::workload::Workload,
+    closest: impl Fn(&Ray, &mut Hit) -> bool,
+    any: impl Fn(&Ray, &mut Hit) -> bool,
+) -> Option<(usize, usize)> {
+    Some(match name {
+        "closest-primary" => (w.primary.len(), measured_closest(closest, &w.primary)),
+        "closest-diffuse" => (w.diffuse.len(), measured_closest(closest, &w.diffuse)),
+        "any-shadow" => (w.shadow.len(), measured_any(any, &w.shadow)),
+        _ => return None,
+    })
+}
+
+/// Prints the ray count for the script (stdout) and the hits for the reader (stderr).
+fn report(name: &str, (rays, hits): (usize, usize)) -> Result<(), String> {
     println!("rays {rays}");
     eprintln!("{name}: {hits} of {rays} rays hit");
     Ok(())

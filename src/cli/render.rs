@@ -113,14 +113,19 @@ fn positive(s: &str) -> Result<f32, String> {
     }
 }
 
+/// Two numbers `a` and `b` written `a{sep}b`; `expected` says what the whole should look like.
+fn u32_pair(s: &str, sep: &str, expected: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("expected {expected}; found \"{s}\"");
+    let (a, b) = s.split_once(sep).ok_or_else(bad)?;
+    Ok((
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    ))
+}
+
 /// `K/N` with K < N.
 fn part_of(s: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("expected K/N, part K (from 0) of N parts, such as 3/8; found \"{s}\"");
-    let (k, n) = s.split_once('/').ok_or_else(bad)?;
-    let (k, n): (u32, u32) = (
-        k.trim().parse().map_err(|_| bad())?,
-        n.trim().parse().map_err(|_| bad())?,
-    );
+    let (k, n) = u32_pair(s, "/", "K/N, part K (from 0) of N parts, such as 3/8")?;
     if n == 0 || k >= n {
         return Err(format!("part {k}/{n} does not exist: K counts from 0 to N-1"));
     }
@@ -129,12 +134,7 @@ fn part_of(s: &str) -> Result<(u32, u32), String> {
 
 /// `A..B` with A < B.
 fn pass_range(s: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("expected A..B, passes A to B-1 (from 0), such as 0..16; found \"{s}\"");
-    let (a, b) = s.split_once("..").ok_or_else(bad)?;
-    let (a, b): (u32, u32) = (
-        a.trim().parse().map_err(|_| bad())?,
-        b.trim().parse().map_err(|_| bad())?,
-    );
+    let (a, b) = u32_pair(s, "..", "A..B, passes A to B-1 (from 0), such as 0..16")?;
     if a >= b {
         return Err(format!("the pass range {a}..{b} is empty"));
     }
