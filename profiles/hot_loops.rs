@@ -16,10 +16,10 @@ use std::hint::black_box;
 use std::path::Path;
 use std::process::ExitCode;
 
+use whitted::accel::PACKET;
 use whitted::accel::bvh2::{Builder, Bvh2};
 use whitted::accel::policy::{AnyHit, Closest};
 use whitted::accel::wide::Bvh4;
-use whitted::accel::wide::packet::PACKET;
 use whitted::accel::{Accel, AccelKind, Hit, Prims};
 use whitted::geometry::ray::Ray;
 use whitted::render::{Options, Renderer};

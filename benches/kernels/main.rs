@@ -28,11 +28,11 @@ use common::{obvhs as obvhs_build, table};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use peer::Traced;
 use rayon::prelude::*;
+use whitted::accel::PACKET;
 #[cfg(any(feature = "bench-embree", feature = "bench-tinybvh"))]
 use whitted::accel::PrimKind;
 use whitted::accel::bvh2::Builder;
 use whitted::accel::policy::{AnyHit, Closest};
-use whitted::accel::wide::packet::PACKET;
 use whitted::accel::wide::{Simd, WideBvh};
 use whitted::accel::{Accel, AccelKind, BuildOptions, Hit, Prims};
 use whitted::geometry::ray::Ray;

@@ -1,10 +1,13 @@
 //! Accelerators. Each answers the same two questions (as tinybvh does on every layout): the closest hit
-//! along a ray (`intersect`) and whether anything lies on a segment (`occluded`); that shared interface is
-//! what lets every structure be checked against brute force with one loop.
+//! along a ray (`intersect`) and whether anything lies on a segment (`occluded`), for one ray or for a
+//! packet of eight (`intersect_packet`, `occluded_packet`); that shared interface is what lets every
+//! structure be checked against brute force with one loop, and lets the renderer send packets without
+//! knowing which structure answers them.
 
 pub mod brute;
 pub mod bvh2;
 pub mod grid;
+pub mod packet;
 pub mod policy;
 pub mod prims;
 pub mod stack;
@@ -12,7 +15,9 @@ pub mod wide;
 
 use std::str::FromStr;
 
+pub use packet::PACKET;
 pub use prims::{Hit, PrimKind, Prims, Surface};
+pub use wide::Simd;
 
 use crate::geometry::ray::Ray;
 use brute::Brute;
@@ -58,7 +63,7 @@ impl AccelKind {
     /// The fastest structure on this CPU (measured on the dragon scenes): the BVH8 where the CPU has
     /// AVX2 for its slab test, else the BVH4 (whose 4-wide test is native SSE everywhere).
     pub fn best() -> AccelKind {
-        if wide::Simd::Avx2.available() {
+        if Simd::Avx2.available() {
             AccelKind::Bvh8
         } else {
             AccelKind::Bvh4
@@ -135,6 +140,25 @@ impl<'a> Accel<'a> {
         }
     }
 
+    /// The wide BVHs' instruction set; `None` for the other structures.
+    pub fn simd(&self) -> Option<Simd> {
+        match self {
+            Accel::Bvh4(b) => Some(b.simd()),
+            Accel::Bvh8(b) => Some(b.simd()),
+            _ => None,
+        }
+    }
+
+    /// Makes a wide BVH use `simd` (tests and benchmarks compare the paths); false, with nothing
+    /// changed, when the CPU lacks it or the structure has no such choice.
+    pub fn set_simd(&mut self, simd: Simd) -> bool {
+        match self {
+            Accel::Bvh4(b) => b.set_simd(simd),
+            Accel::Bvh8(b) => b.set_simd(simd),
+            _ => false,
+        }
+    }
+
     /// Finds the closest hit with `t` in `(t_min, hit.t)`; updates `hit` and returns true if there is one.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
@@ -157,6 +181,38 @@ impl<'a> Accel<'a> {
             Accel::Bvh2(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
             Accel::Bvh4(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
             Accel::Bvh8(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
+        }
+    }
+
+    /// The closest hits of the rays of `rays` whose bit is set in `active`, each with `t` in
+    /// `(t_min, hits[k].t)`: updates those `hits` and returns the mask of the rays that hit. Each ray's
+    /// answer is [`Accel::intersect`]'s; inactive rays' hits are left as they are. The wide BVHs trace
+    /// the packet together (for coherent rays: camera rays of neighbouring pixels, say); the other
+    /// structures answer ray by ray.
+    #[inline]
+    pub fn intersect_packet(
+        &self,
+        rays: &[Ray; PACKET],
+        active: u8,
+        t_min: f32,
+        hits: &mut [Hit; PACKET],
+    ) -> u8 {
+        match self {
+            Accel::Bvh4(b) => b.traverse_packet::<Closest>(rays, active, t_min, hits),
+            Accel::Bvh8(b) => b.traverse_packet::<Closest>(rays, active, t_min, hits),
+            _ => packet::ray_by_ray(active, |k| self.intersect(&rays[k], t_min, &mut hits[k])),
+        }
+    }
+
+    /// The mask of the rays of `rays` in `active` that hit anything with `t` in `(t_min, t_max[k])`:
+    /// [`Accel::occluded`] for each, as a packet where the structure has a packet kernel.
+    #[inline]
+    pub fn occluded_packet(&self, rays: &[Ray; PACKET], active: u8, t_min: f32, t_max: &[f32; PACKET]) -> u8 {
+        let mut hits = t_max.map(Hit::miss);
+        match self {
+            Accel::Bvh4(b) => b.traverse_packet::<AnyHit>(rays, active, t_min, &mut hits),
+            Accel::Bvh8(b) => b.traverse_packet::<AnyHit>(rays, active, t_min, &mut hits),
+            _ => packet::ray_by_ray(active, |k| self.occluded(&rays[k], t_min, t_max[k])),
         }
     }
 }

@@ -39,9 +39,10 @@ use tiles::{TILE, Tile};
 pub enum Kernel {
     /// One ray at a time.
     Single,
-    /// Camera rays in packets of 8 (4x2 pixels) through the wide BVHs' packet kernel, and their hits'
-    /// shadow rays in packets per light sample; other accelerators, and the reflected and refracted
-    /// rays, go one at a time. The image is identical to `Single`'s.
+    /// Camera rays in packets of 8 (4x2 pixels), their hits' shadow rays in packets per light sample,
+    /// and their reflected and refracted rays in packets per kind while they stay coherent
+    /// ([`Accel::intersect_packet`]: the wide BVHs trace them together, the other structures ray by
+    /// ray). The image is identical to `Single`'s.
     Packet,
 }
 
@@ -338,14 +339,9 @@ impl<'a> Renderer<'a> {
                 }
                 let mut buf = [Vec3::ZERO; (TILE * TILE) as usize];
                 let mut rays = RayCounts::default();
-                match (self.options.kernel, self.accel) {
-                    (Kernel::Packet, Accel::Bvh4(bvh)) => {
-                        self.tile_packets(bvh, tile, pass, &mut buf, &mut rays)
-                    }
-                    (Kernel::Packet, Accel::Bvh8(bvh)) => {
-                        self.tile_packets(bvh, tile, pass, &mut buf, &mut rays)
-                    }
-                    _ => {
+                match self.options.kernel {
+                    Kernel::Packet => self.tile_packets(tile, pass, &mut buf, &mut rays),
+                    Kernel::Single => {
                         let mut pattern = PixelPattern::default();
                         for y in tile.y0..tile.y1 {
                             for x in tile.x0..tile.x1 {

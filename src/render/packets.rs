@@ -13,9 +13,7 @@ use super::Renderer;
 use super::sampler::PixelPattern;
 use super::shade::{Bounces, PixelSample, RayCounts, ShadowRay};
 use super::tiles::{TILE, Tile};
-use crate::accel::policy::{AnyHit, Closest};
-use crate::accel::wide::WideBvh;
-use crate::accel::wide::packet::{PACKET, lanes};
+use crate::accel::packet::{PACKET, bits};
 use crate::accel::{Hit, Surface};
 use crate::geometry::ray::Ray;
 
@@ -30,23 +28,22 @@ const MIN_LANES: u32 = 2;
 /// Packet width in pixels (and `PACKET / PACKET_W` rows).
 const PACKET_W: u32 = 4;
 
-/// A packet's rays, the mask of lanes in use, and the colours they see.
-type Lanes<T> = [T; PACKET];
+/// One value per ray of a packet (its rays, their samples, the colours they see).
+type PerRay<T> = [T; PACKET];
 
 impl Renderer<'_> {
     /// Shades `tile` for pass `pass`, packet by packet (pixels outside the image are inactive lanes),
     /// into `buf`: sample `s` of eight pixels at a time, each lane with its pixel's own pattern and
     /// random numbers, summed per pixel in sample order as the single-ray path sums them.
-    pub(super) fn tile_packets<const W: usize>(
+    pub(super) fn tile_packets(
         &self,
-        bvh: &WideBvh<W>,
         tile: Tile,
         pass: u32,
         buf: &mut [Vec3; (TILE * TILE) as usize],
         rays_traced: &mut RayCounts,
     ) {
         let h = PACKET as u32 / PACKET_W;
-        let mut patterns: Lanes<PixelPattern> = Default::default();
+        let mut patterns: PerRay<PixelPattern> = Default::default();
         for y0 in (tile.y0..tile.y1).step_by(h as usize) {
             for x0 in (tile.x0..tile.x1).step_by(PACKET_W as usize) {
                 let pixel = |k: usize| (x0 + k as u32 % PACKET_W, y0 + k as u32 / PACKET_W);
@@ -61,7 +58,7 @@ impl Renderer<'_> {
                 let mut sums = [Vec3::ZERO; PACKET];
                 for s in 0..self.samples() {
                     let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
-                    let mut samples: Lanes<PixelSample> = std::array::from_fn(|k| {
+                    let mut samples: PerRay<PixelSample> = std::array::from_fn(|k| {
                         let (x, y) = pixel(k);
                         if active >> k & 1 == 0 {
                             return self.pixel_sample(pass, 0, 0, Vec2::ZERO);
@@ -70,14 +67,14 @@ impl Renderer<'_> {
                         rays[k] = ray;
                         sample
                     });
-                    let colors = self.shade_packet(bvh, &rays, active, 0, &mut samples);
-                    for k in lanes(active as u32) {
+                    let colors = self.shade_packet(&rays, active, 0, &mut samples);
+                    for k in bits(active) {
                         sums[k] += colors[k];
                         samples[k].rays.primary += 1;
                         *rays_traced += samples[k].rays;
                     }
                 }
-                for k in lanes(active as u32) {
+                for k in bits(active) {
                     let (x, y) = pixel(k);
                     buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] = sums[k] / self.samples() as f32;
                 }
@@ -89,21 +86,20 @@ impl Renderer<'_> {
     /// the closest hits as a packet, then their shadow rays and secondary rays as packets. Each lane
     /// draws its random numbers from its own sample, in the order the single-ray path draws them (its
     /// bounce here, then its refracted ray's tree, then its reflected ray's).
-    fn shade_packet<const W: usize>(
+    fn shade_packet(
         &self,
-        bvh: &WideBvh<W>,
-        rays: &Lanes<Ray>,
+        rays: &PerRay<Ray>,
         active: u8,
         depth: u32,
-        samples: &mut Lanes<PixelSample>,
-    ) -> Lanes<Vec3> {
+        samples: &mut PerRay<PixelSample>,
+    ) -> PerRay<Vec3> {
         let mut hits = [Hit::miss(f32::INFINITY); PACKET];
-        let hit = bvh.traverse_packet::<Closest>(rays, active, 0.0, &mut hits);
-        let surfaces: Lanes<Option<Surface>> =
+        let hit = self.accel.intersect_packet(rays, active, 0.0, &mut hits);
+        let surfaces: PerRay<Option<Surface>> =
             std::array::from_fn(|k| (hit >> k & 1 == 1).then(|| self.prims.surface(&rays[k], &hits[k])));
-        let blocked = self.shadow_packets(bvh, &surfaces, samples);
+        let blocked = self.shadow_packets(&surfaces, samples);
 
-        let bounces: Lanes<Bounces> = std::array::from_fn(|k| match &surfaces[k] {
+        let bounces: PerRay<Bounces> = std::array::from_fn(|k| match &surfaces[k] {
             Some(s) => self.bounces(&rays[k], s, depth, &mut samples[k].rng),
             None => Bounces::default(),
         });
@@ -120,11 +116,11 @@ impl Renderer<'_> {
                     (next[k], mask) = (r, mask | 1 << k);
                 }
             }
-            *seen = self.trace_lanes(bvh, &next, mask, depth + 1, samples);
+            *seen = self.trace_lanes(&next, mask, depth + 1, samples);
         }
 
         let mut out = [Vec3::ZERO; PACKET];
-        for k in lanes(active as u32) {
+        for k in bits(active) {
             let mut extra_shadows = 0;
             out[k] = match &surfaces[k] {
                 None => self.shade(&rays[k], &hits[k], depth, &mut samples[k]),
@@ -151,25 +147,24 @@ impl Renderer<'_> {
     /// [`shade_packet`](Self::shade_packet), or ray by ray when too few lanes are live to share nodes
     /// or their directions point into different octants (rays off a curved mirror, say), which share
     /// few nodes: measured 2.5% faster on `dragon.p3f` than packets of any such rays.
-    fn trace_lanes<const W: usize>(
+    fn trace_lanes(
         &self,
-        bvh: &WideBvh<W>,
-        rays: &Lanes<Ray>,
+        rays: &PerRay<Ray>,
         mask: u8,
         depth: u32,
-        samples: &mut Lanes<PixelSample>,
-    ) -> Lanes<Vec3> {
+        samples: &mut PerRay<PixelSample>,
+    ) -> PerRay<Vec3> {
         let octant = |r: &Ray| r.dir.cmplt(Vec3::ZERO).bitmask();
-        let mut live = lanes(mask as u32);
+        let mut live = bits(mask);
         let coherent = match live.next() {
             Some(first) => live.all(|k| octant(&rays[k]) == octant(&rays[first])),
             None => true,
         };
         if coherent && mask.count_ones() >= MIN_LANES {
-            return self.shade_packet(bvh, rays, mask, depth, samples);
+            return self.shade_packet(rays, mask, depth, samples);
         }
         let mut out = [Vec3::ZERO; PACKET];
-        for k in lanes(mask as u32) {
+        for k in bits(mask) {
             out[k] = self.trace(&rays[k], depth, &mut samples[k]);
         }
         out
@@ -178,32 +173,31 @@ impl Renderer<'_> {
     /// Traces the shadow rays of a packet's hits, one packet per light sample (the first
     /// [`PACKET_LIGHTS`]; lane `k` aims at its own sample's light `i`): bit `i` of lane `k` says whether
     /// light sample `i` is blocked from hit `k`.
-    fn shadow_packets<const W: usize>(
+    fn shadow_packets(
         &self,
-        bvh: &WideBvh<W>,
-        surfaces: &Lanes<Option<Surface>>,
-        samples: &mut Lanes<PixelSample>,
-    ) -> Lanes<u64> {
+        surfaces: &PerRay<Option<Surface>>,
+        samples: &mut PerRay<PixelSample>,
+    ) -> PerRay<u64> {
         let mut blocked = [0u64; PACKET];
         let count = samples[0].lights.len().min(PACKET_LIGHTS);
         for i in 0..count {
             let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
-            let mut hits = [Hit::miss(0.0); PACKET];
+            let mut t_max = [0.0; PACKET];
             let mut active = 0u8;
             for (k, s) in surfaces.iter().enumerate() {
                 let Some(s) = s else { continue };
                 let light = samples[k].lights.get(i);
                 if let Some(shadow) = ShadowRay::new(s.point, s.geometric, s.shading, &light) {
-                    (rays[k], hits[k]) = (shadow.ray, Hit::miss(shadow.distance));
+                    (rays[k], t_max[k]) = (shadow.ray, shadow.distance);
                     active |= 1 << k;
                 }
             }
             if active != 0 {
-                for k in lanes(active as u32) {
+                for k in bits(active) {
                     samples[k].rays.shadow += 1;
                 }
-                let hit = bvh.traverse_packet::<AnyHit>(&rays, active, 0.0, &mut hits);
-                for k in lanes(hit as u32) {
+                let hit = self.accel.occluded_packet(&rays, active, 0.0, &t_max);
+                for k in bits(hit) {
                     blocked[k] |= 1 << i;
                 }
             }

@@ -3,25 +3,27 @@
 //! depth-first into one array. Each node keeps its children's boxes as structure of arrays, so one
 //! `W`-lane slab test answers all of them at once.
 //!
-//! One structure, one collapse and one single-ray kernel serve both widths: [`Bvh4`] (4 lanes of SSE,
-//! the portable default, and the only width with a packet kernel) and [`Bvh8`] (8 lanes: one AVX2
-//! register where the CPU has AVX2, detected at run time, else two SSE halves). Wider nodes mean fewer
-//! node visits and fewer stack operations per ray, which is where half of a BVH4 ray's instructions go
-//! (`profiles/`).
+//! One structure, one collapse, one single-ray kernel (`traverse.rs`) and one packet kernel
+//! (`packet.rs`) serve both widths: [`Bvh4`] (4 lanes of SSE, the default where the CPU lacks AVX2) and
+//! [`Bvh8`] (8 lanes: one AVX2 register where the CPU has AVX2, detected at run time, else two SSE
+//! halves). Both kernels test boxes with the one slab test of `lanes.rs`, on the lane type of the
+//! instruction set chosen there. Wider nodes mean fewer node visits and fewer stack operations per
+//! ray, which is where half of a BVH4 ray's instructions go (`profiles/`).
 
 mod collapse;
-pub mod packet;
-mod slab;
+mod lanes;
+mod packet;
 mod traverse;
 pub mod tri4;
 
-pub use slab::Simd;
+pub use lanes::Simd;
 
 use glam::Vec3;
 
 use super::bvh2::{self, Builder, Bvh2, Stats};
 use super::prims::Prims;
 use crate::geometry::aabb::Aabb;
+use lanes::Isa;
 
 /// A child reference: an interior node's index, a leaf, or [`EMPTY`]. A leaf is
 /// `LEAF | start << COUNT_BITS | count`, with [`TRIANGLES`] set when it holds triangles: then `start` is
@@ -92,8 +94,8 @@ pub struct WideBvh<'a, const W: usize> {
     pub root: ChildRef,
     /// The box around everything.
     pub bounds: Aabb,
-    /// The slab test's instruction set, chosen at build time from the CPU.
-    simd: Simd,
+    /// The kernels' instruction set, chosen at build time from the CPU.
+    isa: Isa,
 }
 
 /// The 4-wide BVH (the default accelerator on CPUs without AVX2).
@@ -121,23 +123,25 @@ impl<'a, const W: usize> WideBvh<'a, W> {
             tris: c.tris,
             root: c.root,
             bounds: bvh2.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds),
-            simd: Simd::detect(),
+            isa: Isa::detect(),
         }
     }
 
-    /// The instruction set the slab tests use.
+    /// The instruction set the kernels use (the BVH4's single-ray kernel is SSE on any CPU).
     pub fn simd(&self) -> Simd {
-        self.simd
+        self.isa.simd()
     }
 
-    /// Uses `simd` for the slab tests (tests and benchmarks compare the paths); one the CPU lacks is
+    /// Uses `simd` for the kernels (tests and benchmarks compare the paths); one the CPU lacks is
     /// refused and the current one kept.
     pub fn set_simd(&mut self, simd: Simd) -> bool {
-        let ok = simd.available();
-        if ok {
-            self.simd = simd;
+        match Isa::new(simd) {
+            Some(isa) => {
+                self.isa = isa;
+                true
+            }
+            None => false,
         }
-        ok
     }
 
     /// The box of child slot `k` of node `n`.

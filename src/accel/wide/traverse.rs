@@ -1,5 +1,5 @@
 //! The single-ray kernel of the wide BVHs, written once for closest and any hit, both widths and every
-//! slab instruction set ([`super::slab`]).
+//! instruction set ([`super::lanes`]), and the leaf test that the packet kernel shares.
 //!
 //! Per node: one `W`-lane slab test of the children. The near and far planes of each axis are chosen
 //! once per ray by the sign of its direction (not a min/max per node), which keeps the empty slots'
@@ -7,9 +7,11 @@
 //! distance lies beyond the closest hit so far; any-hit visits them in any order and returns at the first
 //! hit.
 
-#[cfg(target_arch = "x86_64")]
-use super::slab::Avx8;
-use super::slab::{Lanes, Portable8, Simd, Sse4};
+use std::marker::PhantomData;
+
+use wide::f32x4;
+
+use super::lanes::{Lanes, OnLanes8, SlabRays, slab};
 use super::{Bvh4, Bvh8, ChildRef, EMPTY, LEAF, STACK, TRIANGLES, WideBvh, leaf_parts};
 use crate::accel::policy::HitPolicy;
 use crate::accel::prims::Hit;
@@ -18,9 +20,10 @@ use crate::geometry::ray::{CULL_MARGIN, Ray};
 
 impl Bvh4<'_> {
     /// The closest (or, with [`crate::accel::policy::AnyHit`], any) hit with `t` in `(t_min, hit.t)`.
+    /// Four lanes are one SSE register on every x86-64 CPU: no dispatch.
     #[inline]
     pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
-        self.traverse_with::<P, Sse4>(ray, t_min, hit)
+        self.single::<P, f32x4>(ray, t_min, hit)
     }
 }
 
@@ -29,27 +32,41 @@ impl Bvh8<'_> {
     /// time ([`WideBvh::simd`]).
     #[inline]
     pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
-        match self.simd {
-            // SAFETY: `simd` is `Avx2` only if the CPU has AVX2 and FMA (`Simd::detect`, `set_simd`).
-            #[cfg(target_arch = "x86_64")]
-            Simd::Avx2 => unsafe { self.traverse_avx2::<P>(ray, t_min, hit) },
-            _ => self.traverse_with::<P, Portable8>(ray, t_min, hit),
-        }
+        self.isa.run8(Single::<P> {
+            bvh: self,
+            ray,
+            t_min,
+            hit,
+            policy: PhantomData,
+        })
     }
+}
 
-    /// The kernel compiled for AVX2, with the 256-bit slab test inlined into it.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    fn traverse_avx2<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
-        self.traverse_with::<P, Avx8>(ray, t_min, hit)
+/// The BVH8's single-ray kernel as a computation over eight lanes, for [`super::lanes::Isa::run8`].
+struct Single<'r, 'b, P> {
+    bvh: &'r Bvh8<'b>,
+    ray: &'r Ray,
+    t_min: f32,
+    hit: &'r mut Hit,
+    policy: PhantomData<P>,
+}
+
+impl<P: HitPolicy> OnLanes8 for Single<'_, '_, P> {
+    type Output = bool;
+
+    #[inline(always)]
+    fn run<L: Lanes<8>>(self) -> bool {
+        self.bvh.single::<P, L>(self.ray, self.t_min, self.hit)
     }
 }
 
 impl<const W: usize> WideBvh<'_, W> {
-    /// Tests the primitives of a leaf; true if the search is over (any-hit found one). Triangles go four
-    /// at a time through their SIMD blocks, other kinds one by one.
+    /// Tests the primitives of leaf `r` against one ray; sets `found` on a hit and returns true if the
+    /// search is over (any-hit found one). Triangles go four at a time through their SIMD blocks, in
+    /// order, a hit kept only when strictly nearer; other kinds one by one. The packet kernel calls this
+    /// for each of its rays, so both kernels find the same hits, ties included.
     #[inline(always)]
-    fn leaf<P: HitPolicy>(
+    pub(super) fn leaf<P: HitPolicy>(
         &self,
         r: ChildRef,
         ray: &Ray,
@@ -82,14 +99,14 @@ impl<const W: usize> WideBvh<'_, W> {
         P::ANY && hit_one
     }
 
-    /// The one single-ray traversal, for both policies, every width and every slab instruction set.
+    /// The one single-ray traversal, for both policies, every width and every lane type.
     #[inline(always)]
-    fn traverse_with<P: HitPolicy, L: Lanes<W>>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+    fn single<P: HitPolicy, L: Lanes<W>>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
         let mut found = self.prims.intersect_planes::<P>(ray, t_min, hit);
         if (P::ANY && found) || self.root == EMPTY {
             return found;
         }
-        let r = L::prepare(ray);
+        let r = SlabRays::<L>::splat(ray);
         let mut stack = Stack::<(ChildRef, f32), STACK>::new();
         let mut current = self.root;
         loop {
@@ -99,7 +116,10 @@ impl<const W: usize> WideBvh<'_, W> {
                 }
             } else {
                 let node = &self.nodes[current as usize];
-                let (t, mut mask) = L::slab(node, &r, t_min, hit.t * CULL_MARGIN);
+                let plane =
+                    |axis: usize, max: bool| L::load(if max { &node.max[axis] } else { &node.min[axis] });
+                let (t, mut mask) = slab(&r, plane, L::splat(t_min), L::splat(hit.t * CULL_MARGIN));
+                let t = t.to_array();
                 if mask != 0 {
                     let first = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -141,7 +161,7 @@ impl<const W: usize> WideBvh<'_, W> {
                         mask &= mask - 1;
                         stack.push((node.child[k], t[k]));
                     }
-                    sort_far_to_near(stack.above_mut(start));
+                    sort_far_to_near(stack.above_mut(start), |e| e.1);
                     current = stack.pop().expect("just pushed").0;
                     continue;
                 }
@@ -160,13 +180,14 @@ impl<const W: usize> WideBvh<'_, W> {
     }
 }
 
-/// Sorts 2 to 8 entries by decreasing entry distance (insertion sort: at most six compares for four,
-/// and a ray enters more than four of eight children rarely).
+/// Sorts the 2 to 8 entries one node pushed by decreasing entry distance `key`, so that the nearest is
+/// popped first (insertion sort: at most six compares for four, and a ray enters more than four of
+/// eight children rarely). Both kernels order their stacks with it.
 #[inline(always)]
-fn sort_far_to_near(run: &mut [(ChildRef, f32)]) {
+pub(super) fn sort_far_to_near<T>(run: &mut [T], key: impl Fn(&T) -> f32) {
     for i in 1..run.len() {
         let mut j = i;
-        while j > 0 && run[j - 1].1 < run[j].1 {
+        while j > 0 && key(&run[j - 1]) < key(&run[j]) {
             run.swap(j - 1, j);
             j -= 1;
         }

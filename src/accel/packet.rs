@@ -1,0 +1,26 @@
+//! Ray packets: the eight-ray form of the accelerators' two verbs ([`super::Accel::intersect_packet`],
+//! [`super::Accel::occluded_packet`]). A packet is eight rays side by side and a mask of those in use
+//! (bit `k` for ray `k`); every accelerator answers it, the wide BVHs with their packet kernel and the
+//! others ray by ray, with the answers each ray would get alone.
+
+/// Rays per packet: the eight lanes of one AVX2 register (two SSE registers elsewhere).
+pub const PACKET: usize = 8;
+
+/// The rays of a packet's mask, by index, the first ray first.
+#[inline(always)]
+pub fn bits(mask: u8) -> impl Iterator<Item = usize> {
+    let mut mask = mask as u32;
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let k = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            k
+        })
+    })
+}
+
+/// The mask of the rays in `active` for which `answer` is true: a packet answered ray by ray.
+#[inline]
+pub(super) fn ray_by_ray(active: u8, mut answer: impl FnMut(usize) -> bool) -> u8 {
+    bits(active).fold(0, |m, k| if answer(k) { m | 1 << k } else { m })
+}

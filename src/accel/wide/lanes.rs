@@ -1,0 +1,320 @@
+//! SIMD lanes: the one vector abstraction under the wide BVHs' kernels, the slab test written once over
+//! it, and the one run-time choice of instruction set.
+//!
+//! A [`Lanes<N>`] value is `N` floats side by side: `wide`'s `f32x4` (one SSE register), `wide`'s
+//! `f32x8` (two SSE halves, so any x86-64 CPU) and [`Avx8`] (one AVX2 register). The single-ray kernel
+//! puts a node's children in the lanes (one ray against `W` boxes); the packet kernel puts eight rays in
+//! them (eight rays against one box). Both call [`slab`], the same operations in the same order on every
+//! lane type (`max(near, x)` and `min(far, x)` with the running value first, as `maxps`/`minps` order
+//! their operands, and an ordered `<=` for the mask), so every path enters exactly the same boxes and the
+//! images do not depend on the CPU.
+//!
+//! AVX2 code is reached only through [`Isa::run8`], and an [`Isa`] that selects AVX2 is made only by
+//! [`Isa::new`] after the CPU was asked: the [`Avx8`] lane type is private to this file, and the
+//! [`Avx2`] token that the AVX2 variant carries has a private field. No other code can run AVX2
+//! instructions on a CPU without them.
+
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::*;
+
+use wide::{f32x4, f32x8};
+
+use crate::geometry::ray::{Ray, SLAB_ROBUST, safe_inverse};
+
+/// `N` floats in SIMD lanes: what the slab test and the packet kernel's bookkeeping need.
+pub(super) trait Lanes<const N: usize>: Copy {
+    /// `v` in every lane.
+    fn splat(v: f32) -> Self;
+    /// The lanes from an array.
+    fn load(a: &[f32; N]) -> Self;
+    /// The lanes as an array.
+    fn to_array(self) -> [f32; N];
+    /// Lane-wise minimum (`self` is the first operand).
+    fn min(self, o: Self) -> Self;
+    /// Lane-wise maximum (`self` is the first operand).
+    fn max(self, o: Self) -> Self;
+    /// Lane-wise difference.
+    fn sub(self, o: Self) -> Self;
+    /// Lane-wise product.
+    fn mul(self, o: Self) -> Self;
+    /// The bit mask of the lanes where `self <= o` (ordered: false on NaN).
+    fn le(self, o: Self) -> u32;
+}
+
+/// [`Lanes`] over `wide`'s types, written once for both widths.
+macro_rules! wide_lanes {
+    ($v:ty, $n:literal) => {
+        impl Lanes<$n> for $v {
+            #[inline(always)]
+            fn splat(v: f32) -> Self {
+                <$v>::splat(v)
+            }
+            #[inline(always)]
+            fn load(a: &[f32; $n]) -> Self {
+                <$v>::new(*a)
+            }
+            #[inline(always)]
+            fn to_array(self) -> [f32; $n] {
+                <$v>::to_array(self)
+            }
+            #[inline(always)]
+            fn min(self, o: Self) -> Self {
+                self.fast_min(o)
+            }
+            #[inline(always)]
+            fn max(self, o: Self) -> Self {
+                self.fast_max(o)
+            }
+            #[inline(always)]
+            fn sub(self, o: Self) -> Self {
+                self - o
+            }
+            #[inline(always)]
+            fn mul(self, o: Self) -> Self {
+                self * o
+            }
+            #[inline(always)]
+            fn le(self, o: Self) -> u32 {
+                self.simd_le(o).to_bitmask()
+            }
+        }
+    };
+}
+
+wide_lanes!(f32x4, 4);
+wide_lanes!(f32x8, 8);
+
+/// Eight lanes in one AVX2 register. Values of this type exist only inside [`run_avx2`], which runs
+/// only on CPUs with AVX2 and FMA (an [`Avx2`] token is proof of that); that function is compiled for
+/// AVX2, so these intrinsics inline into the kernels it runs.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+struct Avx8(__m256);
+
+/// `unsafe` blocks of [`Avx8`]'s methods: each is an AVX intrinsic, reached only from [`run_avx2`].
+#[cfg(target_arch = "x86_64")]
+macro_rules! avx {
+    ($e:expr) => {
+        // SAFETY: `Avx8` is used only by code that `run_avx2` runs, on CPUs with AVX2 (see the type).
+        unsafe { $e }
+    };
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Lanes<8> for Avx8 {
+    #[inline(always)]
+    fn splat(v: f32) -> Self {
+        Avx8(avx!(_mm256_set1_ps(v)))
+    }
+    #[inline(always)]
+    fn load(a: &[f32; 8]) -> Self {
+        // An unaligned load of eight floats from an eight-float array.
+        Avx8(avx!(_mm256_loadu_ps(a.as_ptr())))
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f32; 8] {
+        let mut out = [0.0f32; 8];
+        // An unaligned store of eight floats into an eight-float array.
+        avx!(_mm256_storeu_ps(out.as_mut_ptr(), self.0));
+        out
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        Avx8(avx!(_mm256_min_ps(self.0, o.0)))
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        Avx8(avx!(_mm256_max_ps(self.0, o.0)))
+    }
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Avx8(avx!(_mm256_sub_ps(self.0, o.0)))
+    }
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        Avx8(avx!(_mm256_mul_ps(self.0, o.0)))
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> u32 {
+        avx!(_mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0))) as u32
+    }
+}
+
+/// The instruction sets a wide BVH's kernels can run on (the public name of a choice; [`Isa`] is the
+/// checked one).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Simd {
+    /// Baseline x86-64 SSE (or whatever `wide` maps to elsewhere): runs on every CPU.
+    Portable,
+    /// 256-bit AVX2 (with FMA) for eight lanes: detected at run time.
+    Avx2,
+}
+
+impl Simd {
+    /// The best the running CPU has.
+    pub fn detect() -> Simd {
+        Isa::detect().simd()
+    }
+
+    /// True if the running CPU can execute it.
+    pub fn available(self) -> bool {
+        Isa::new(self).is_some()
+    }
+}
+
+/// Proof that the running CPU has AVX2 and FMA: made only by [`Isa::new`], after asking the CPU.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Avx2 {
+    _detected: (),
+}
+
+/// A checked instruction set: what the kernels dispatch on, once per ray or packet.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Isa {
+    /// `wide`'s lanes: any CPU.
+    Portable,
+    /// AVX2, with the proof that the CPU has it.
+    #[cfg(target_arch = "x86_64")]
+    Avx2(Avx2),
+}
+
+impl Isa {
+    /// The best the running CPU has.
+    pub fn detect() -> Isa {
+        Isa::new(Simd::Avx2).unwrap_or(Isa::Portable)
+    }
+
+    /// `simd` if the running CPU has it.
+    pub fn new(simd: Simd) -> Option<Isa> {
+        match simd {
+            Simd::Portable => Some(Isa::Portable),
+            #[cfg(target_arch = "x86_64")]
+            Simd::Avx2 => (is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"))
+                .then_some(Isa::Avx2(Avx2 { _detected: () })),
+            #[cfg(not(target_arch = "x86_64"))]
+            Simd::Avx2 => None,
+        }
+    }
+
+    /// The public name of this instruction set.
+    pub fn simd(self) -> Simd {
+        match self {
+            Isa::Portable => Simd::Portable,
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2(_) => Simd::Avx2,
+        }
+    }
+
+    /// Runs `k` on eight-lane vectors of this instruction set: the one run-time dispatch of the
+    /// kernels.
+    #[inline(always)]
+    pub fn run8<K: OnLanes8>(self, k: K) -> K::Output {
+        match self {
+            // SAFETY: an `Avx2` token exists only if the CPU has AVX2 and FMA (`Isa::new`).
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2(_) => unsafe { run_avx2(k) },
+            Isa::Portable => k.run::<f32x8>(),
+        }
+    }
+}
+
+/// A kernel over eight-lane vectors, for [`Isa::run8`] to run on the lane type it chose.
+pub(super) trait OnLanes8 {
+    type Output;
+    fn run<L: Lanes<8>>(self) -> Self::Output;
+}
+
+/// `k` compiled for AVX2 (the whole kernel, so that its intrinsics and `wide`'s operations inline into
+/// one AVX2 function), on one 256-bit register per eight lanes.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn run_avx2<K: OnLanes8>(k: K) -> K::Output {
+    k.run::<Avx8>()
+}
+
+/// Rays prepared for slab tests (Kay and Kajiya 1986): per axis their origins and (Embree's
+/// [`safe_inverse`]) inverse directions in lanes, splatted for one ray or side by side for a packet, and
+/// per axis whether the max plane is the near one (Embree's near/far plane selection, once per ray or
+/// packet rather than a min/max per box). When a packet's rays disagree in a sign (`mixed`), each lane
+/// orders its two planes by min/max instead, which gives the same planes for any box that is not
+/// inverted.
+pub(super) struct SlabRays<V> {
+    origin: [V; 3],
+    inv: [V; 3],
+    flip: [bool; 3],
+    mixed: bool,
+}
+
+impl<V> SlabRays<V> {
+    /// One ray in every lane.
+    #[inline(always)]
+    pub fn splat<const N: usize>(ray: &Ray) -> Self
+    where
+        V: Lanes<N>,
+    {
+        let inv = safe_inverse(ray.dir);
+        SlabRays {
+            origin: ray.origin.to_array().map(V::splat),
+            inv: inv.to_array().map(V::splat),
+            flip: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
+            mixed: false,
+        }
+    }
+
+    /// Eight rays, one per lane; the signs of the rays in `live` choose the planes.
+    #[inline(always)]
+    pub fn packet(rays: &[Ray; 8], live: u32) -> Self
+    where
+        V: Lanes<8>,
+    {
+        // Plain loops and explicit arrays: `map` and `from_fn` closures over arrays were left out of
+        // line here, outside the AVX2 compile (callgrind).
+        let (mut origin, mut inv, mut negative) = ([[0.0f32; 8]; 3], [[0.0f32; 8]; 3], [0u32; 3]);
+        for (k, r) in rays.iter().enumerate() {
+            let i = safe_inverse(r.dir);
+            for a in 0..3 {
+                origin[a][k] = r.origin[a];
+                inv[a][k] = i[a];
+                negative[a] |= u32::from(i[a] < 0.0) << k;
+            }
+        }
+        let negative = [negative[0] & live, negative[1] & live, negative[2] & live];
+        SlabRays {
+            origin: [V::load(&origin[0]), V::load(&origin[1]), V::load(&origin[2])],
+            inv: [V::load(&inv[0]), V::load(&inv[1]), V::load(&inv[2])],
+            flip: [negative[0] != 0, negative[1] != 0, negative[2] != 0],
+            mixed: negative.iter().any(|&m| m != 0 && m != live),
+        }
+    }
+}
+
+/// The slab test: each lane's entry distance into its box and the mask of lanes whose ray enters it
+/// within `[t_min, t_max]`. `plane(axis, max)` gives the boxes' min or max planes on `axis` in lanes (a
+/// node's children side by side, or one child splatted). The exit distance is scaled by
+/// [`SLAB_ROBUST`] so that rounding never rejects a primitive touching the box. An empty slot's inverted
+/// box gives near = +∞ > far = −∞ whichever plane is near.
+#[inline(always)]
+pub(super) fn slab<const N: usize, V: Lanes<N>>(
+    rays: &SlabRays<V>,
+    plane: impl Fn(usize, bool) -> V,
+    t_min: V,
+    t_max: V,
+) -> (V, u32) {
+    let mut near = t_min;
+    let mut far = V::splat(f32::INFINITY);
+    for axis in 0..3 {
+        let flip = rays.flip[axis];
+        let t0 = plane(axis, flip).sub(rays.origin[axis]).mul(rays.inv[axis]);
+        let t1 = plane(axis, !flip).sub(rays.origin[axis]).mul(rays.inv[axis]);
+        if rays.mixed {
+            near = near.max(t0.min(t1));
+            far = far.min(t0.max(t1));
+        } else {
+            near = near.max(t0);
+            far = far.min(t1);
+        }
+    }
+    let far = far.mul(V::splat(SLAB_ROBUST)).min(t_max);
+    (near, near.le(far))
+}
