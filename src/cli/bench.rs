@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use clap::Args;
 use whitted::accel::{Accel, Prims};
-use whitted::render::shade::RayCounts;
+use whitted::render::RayCounts;
 use whitted::render::{Options, Renderer};
 
 use super::render::{FrameArgs, load_scene, resolution, thread_pool};

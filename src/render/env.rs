@@ -6,6 +6,7 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use crate::error::{Error, Result};
+use crate::scene::Scene;
 
 /// The six faces, in the order of the files `DIR/{right,left,top,bottom,front,back}.jpg`: +x, −x, +y, −y,
 /// +z, −z (the OpenGL cube-map convention most skybox sets follow).
@@ -80,6 +81,23 @@ pub struct Background {
 }
 
 impl Background {
+    /// The scene's background: its skybox (`env DIR`) if that loads, else its colour, with a warning
+    /// when a skybox was there but did not load. Needs nothing but the scene (no accelerator, no
+    /// renderer), so a viewer loads it once for all its frames.
+    pub fn load(scene: &Scene) -> (Self, Option<String>) {
+        match &scene.env {
+            Some(dir) if dir.is_dir() => match CubeMap::load(dir) {
+                Ok(sky) => (Background::sky(scene.background, sky), None),
+                Err(e) => (
+                    Background::color(scene.background),
+                    Some(format!("{e}; using the background colour")),
+                ),
+            },
+            // A missing directory was reported by the loader already.
+            _ => (Background::color(scene.background), None),
+        }
+    }
+
     /// A flat colour.
     pub fn color(color: Vec3) -> Self {
         Background { color, sky: None }

@@ -1,18 +1,16 @@
-//! The packet integrator: a tile's camera rays traced eight at a time (4x2 pixels), and then, packet
-//! by packet, the shadow rays of their hits (one packet per light sample) and their reflected and
-//! refracted rays (one packet per kind), recursively to the depth limit. Rays that leave neighbouring
-//! pixels' hits toward one light, or off one smooth surface, stay about as coherent as the camera rays.
+//! The Whitted integrator's packet twin: eight rays (the camera rays of 4x2 pixels, from
+//! [`super::frame`]) traced as a packet, and then, packet by packet, the shadow rays of their hits (one
+//! packet per light sample) and their reflected and refracted rays (one packet per kind), recursively
+//! to the depth limit. Rays that leave neighbouring pixels' hits toward one light, or off one smooth
+//! surface, stay about as coherent as the camera rays.
 //!
-//! Every lane is shaded by [`Renderer::shade_surface`] from the same rays the single-ray path traces
-//! ([`ShadowRay::new`], [`Renderer::bounces`]) and the packet kernel answers each ray as the single-ray
-//! kernel does, so the image is the single-ray path's, bit for bit.
+//! Every lane is shaded by [`Whitted::shade_surface`] from the same rays the single-ray path traces
+//! ([`ShadowRay::new`], [`Whitted::bounces`]) and the accelerators' packet verbs answer each ray as
+//! their single-ray verbs do, so the image is the single-ray path's, bit for bit.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
-use super::Renderer;
-use super::sampler::PixelPattern;
-use super::shade::{Bounces, PixelSample, RayCounts, ShadowRay};
-use super::tiles::{TILE, Tile};
+use super::whitted::{Bounces, PixelSample, ShadowRay, Whitted};
 use crate::accel::packet::{PACKET, bits};
 use crate::accel::{Hit, Surface};
 use crate::geometry::ray::Ray;
@@ -25,68 +23,15 @@ const PACKET_LIGHTS: usize = 64;
 /// one ray as for eight.
 const MIN_LANES: u32 = 2;
 
-/// Packet width in pixels (and `PACKET / PACKET_W` rows).
-const PACKET_W: u32 = 4;
-
 /// One value per ray of a packet (its rays, their samples, the colours they see).
-type PerRay<T> = [T; PACKET];
+pub(super) type PerRay<T> = [T; PACKET];
 
-impl Renderer<'_> {
-    /// Shades `tile` for pass `pass`, packet by packet (pixels outside the image are inactive lanes),
-    /// into `buf`: sample `s` of eight pixels at a time, each lane with its pixel's own pattern and
-    /// random numbers, summed per pixel in sample order as the single-ray path sums them.
-    pub(super) fn tile_packets(
-        &self,
-        tile: Tile,
-        pass: u32,
-        buf: &mut [Vec3; (TILE * TILE) as usize],
-        rays_traced: &mut RayCounts,
-    ) {
-        let h = PACKET as u32 / PACKET_W;
-        let mut patterns: PerRay<PixelPattern> = Default::default();
-        for y0 in (tile.y0..tile.y1).step_by(h as usize) {
-            for x0 in (tile.x0..tile.x1).step_by(PACKET_W as usize) {
-                let pixel = |k: usize| (x0 + k as u32 % PACKET_W, y0 + k as u32 / PACKET_W);
-                let mut active = 0u8;
-                for (k, pattern) in patterns.iter_mut().enumerate() {
-                    let (x, y) = pixel(k);
-                    if x < tile.x1 && y < tile.y1 {
-                        self.fill_pattern(x, y, pass, pattern);
-                        active |= 1 << k;
-                    }
-                }
-                let mut sums = [Vec3::ZERO; PACKET];
-                for s in 0..self.samples() {
-                    let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
-                    let mut samples: PerRay<PixelSample> = std::array::from_fn(|k| {
-                        let (x, y) = pixel(k);
-                        if active >> k & 1 == 0 {
-                            return self.pixel_sample(pass, 0, 0, Vec2::ZERO);
-                        }
-                        let (ray, sample) = self.camera_sample(x, y, pass, s, &patterns[k]);
-                        rays[k] = ray;
-                        sample
-                    });
-                    let colors = self.shade_packet(&rays, active, 0, &mut samples);
-                    for k in bits(active) {
-                        sums[k] += colors[k];
-                        samples[k].rays.primary += 1;
-                        *rays_traced += samples[k].rays;
-                    }
-                }
-                for k in bits(active) {
-                    let (x, y) = pixel(k);
-                    buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] = sums[k] / self.samples() as f32;
-                }
-            }
-        }
-    }
-
+impl Whitted<'_> {
     /// The colours seen along the rays of `rays` in `active` after `depth` bounces (others are zero):
     /// the closest hits as a packet, then their shadow rays and secondary rays as packets. Each lane
     /// draws its random numbers from its own sample, in the order the single-ray path draws them (its
     /// bounce here, then its refracted ray's tree, then its reflected ray's).
-    fn shade_packet(
+    pub(super) fn shade_packet(
         &self,
         rays: &PerRay<Ray>,
         active: u8,

@@ -16,8 +16,8 @@ use glam::Vec3;
 
 use super::Renderer;
 use super::film::Film;
-use super::shade::RayCounts;
 use super::tiles::{self, Tile};
+use super::whitted::RayCounts;
 
 /// Per-pixel sums of the passes so far over a set of tiles.
 #[derive(Clone, Debug)]

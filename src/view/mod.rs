@@ -24,9 +24,10 @@ use glam::Vec3;
 use rayon::ThreadPool;
 
 use crate::accel::{Accel, AccelKind, Prims};
+use crate::render::RayCounts;
+use crate::render::env::Background;
 use crate::render::film::{Film, to_u8};
 use crate::render::progressive::Progressive;
-use crate::render::shade::RayCounts;
 use crate::render::{Options, Renderer};
 use crate::scene::Scene;
 use state::{Accumulator, Job};
@@ -108,10 +109,11 @@ pub(crate) fn render_loop(
     srgb: bool,
     mut deliver: impl FnMut(Frame) -> bool,
 ) {
-    // The renderer that reads the skybox, once; the frames' renderers share its background. Its own
-    // structure, brute force (free to build), is never traced.
-    let brute = Accel::build(Prims::new(scene), AccelKind::None);
-    let mut first: Option<Renderer> = None;
+    // The skybox is read once; the frames' renderers share its images.
+    let (background, warning) = Background::load(scene);
+    if let Some(w) = warning {
+        eprintln!("whitted: warning: {w}");
+    }
     // Each structure is built the first time it is asked for and kept, so switching back is instant.
     let mut built: Vec<(AccelKind, Accel)> = Vec::new();
     let mut acc = Accumulator::default();
@@ -135,13 +137,6 @@ pub(crate) fn render_loop(
                 Err(_) => return,
             }
         };
-        let loaded = first.get_or_insert_with(|| {
-            let renderer = Renderer::new(scene, &brute, job.options);
-            for w in &renderer.warnings {
-                eprintln!("whitted: warning: {w}");
-            }
-            renderer
-        });
         let slot = match built.iter().position(|(kind, _)| *kind == job.accel) {
             Some(slot) => slot,
             None => {
@@ -150,7 +145,13 @@ pub(crate) fn render_loop(
                 built.len() - 1
             }
         };
-        let mut renderer = loaded.with_view(&job.camera, &built[slot].1, job.options);
+        let mut renderer = Renderer::with_view(
+            scene,
+            &built[slot].1,
+            job.options,
+            &job.camera,
+            background.clone(),
+        );
         if !job.soft_shadows {
             renderer = renderer.with_regular_lights();
         }

@@ -1,21 +1,23 @@
 //! The Whitted integrator (Whitted 1980): local Blinn-Phong colour from every light sample not in shadow,
 //! plus mirror reflection and Snell refraction weighted by Schlick's Fresnel term, with Beer absorption
-//! inside transparent objects.
+//! inside transparent objects. It answers "what colour does this ray see"; which rays to ask it about
+//! (pixels, samples, tiles, passes) is the frame's business ([`super::frame`]). Its packet twin, the
+//! same shading for eight rays at a time, is [`super::packets`].
 //!
-//! Conventions (those of NFF/p3f renderers, `shared/DESIGN.md`): surfaces are two-sided, so normals are
-//! turned toward the incoming ray; no ambient term; lights have no falloff; secondary and shadow rays start
-//! [`EPSILON`] along the geometric normal on the side they leave from. In Whitted's model a transparent
-//! object casts a full shadow: shadow rays do not pass through glass.
+//! Conventions (those of NFF/p3f renderers; the README lists them): surfaces are two-sided, so normals
+//! are turned toward the incoming ray; no ambient term; lights have no falloff; secondary and shadow rays
+//! start [`EPSILON`] along the geometric normal on the side they leave from. In Whitted's model a
+//! transparent object casts a full shadow: shadow rays do not pass through glass.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
-use super::Renderer;
-use super::light::{LightSample, Lights};
+use super::env::Background;
+use super::light::{self, LightSample, Lights};
 use super::optics::{beer, reflect, refract, schlick};
 use super::sampler::Sampler;
-use crate::accel::{Hit, Surface};
+use crate::accel::{Accel, Hit, Prims, Surface};
 use crate::geometry::ray::Ray;
-use crate::scene::Material;
+use crate::scene::{Material, QuadLight, Scene};
 
 /// Offset of secondary and shadow ray origins along the geometric normal, in scene units.
 pub const EPSILON: f32 = 1e-4;
@@ -110,7 +112,70 @@ pub struct PixelSample<'a> {
 /// Tries at drawing a fuzzy reflection above the surface before settling for the mirror direction.
 const FUZZ_TRIES: u32 = 16;
 
-impl Renderer<'_> {
+/// The integrator of one frame: the scene, the structure that answers its rays, what a ray that leaves
+/// the scene sees, the light samples and each material's roughness; shared read-only by the workers.
+pub struct Whitted<'a> {
+    scene: &'a Scene,
+    pub(super) prims: Prims<'a>,
+    pub(super) accel: &'a Accel<'a>,
+    background: Background,
+    /// Point lights, and without sampling the quad lights' regular grids.
+    fixed_lights: Vec<LightSample>,
+    /// Quad lights sampled at one point per pixel sample (none without sampling).
+    quads: &'a [QuadLight],
+    /// Each material's roughness (the file's, or the default).
+    roughness: Vec<f32>,
+    /// Most bounces after the primary hit.
+    max_depth: u32,
+}
+
+impl<'a> Whitted<'a> {
+    /// The integrator of `scene` through `accel`. With `sampled_lights`, each quad light is sampled at
+    /// one point per pixel sample (soft shadows); without, it is its regular grid of point lights (the
+    /// course's spp-0 model). Materials without a roughness of their own get `roughness`.
+    pub fn new(
+        scene: &'a Scene,
+        accel: &'a Accel<'a>,
+        background: Background,
+        sampled_lights: bool,
+        max_depth: u32,
+        roughness: f32,
+    ) -> Self {
+        let (fixed_lights, quads) = if sampled_lights {
+            (light::point_samples(scene), &scene.area_lights[..])
+        } else {
+            (light::regular_samples(scene), &[][..])
+        };
+        Whitted {
+            scene,
+            prims: Prims::new(scene),
+            accel,
+            background,
+            fixed_lights,
+            quads,
+            roughness: scene
+                .materials
+                .iter()
+                .map(|m| m.roughness.unwrap_or(roughness))
+                .collect(),
+            max_depth,
+        }
+    }
+
+    /// Quad lights as their regular grids of point lights whatever the sampling: hard-edged, banded
+    /// shadows without noise (the viewer's soft-shadow switch).
+    pub fn with_regular_lights(mut self) -> Self {
+        self.fixed_lights = light::regular_samples(self.scene);
+        self.quads = &[];
+        self
+    }
+
+    /// The light samples a pixel sample sees: the fixed lights, and each quad light at the point `uv`
+    /// of its area.
+    pub fn lights(&self, uv: Vec2) -> Lights<'_> {
+        Lights::new(&self.fixed_lights, self.quads, uv)
+    }
+
     /// The colour seen along `ray` (unit direction) after `depth` bounces.
     pub fn trace(&self, ray: &Ray, depth: u32, sample: &mut PixelSample) -> Vec3 {
         let mut hit = Hit::miss(f32::INFINITY);
@@ -148,7 +213,7 @@ impl Renderer<'_> {
     /// material's mirror direction is perturbed within a ball of its roughness, drawn from `rng`.
     pub fn bounces(&self, ray: &Ray, surface: &Surface, depth: u32, rng: &mut Sampler) -> Bounces {
         let mut out = Bounces::default();
-        if depth >= self.options.max_depth {
+        if depth >= self.max_depth {
             return out;
         }
         let m = &self.scene.materials[surface.material as usize];
