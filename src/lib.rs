@@ -39,9 +39,10 @@ pub mod accel;
 pub mod digest;
 pub mod error;
 pub mod geometry;
+#[cfg(feature = "kit")]
+pub mod kit;
 pub mod render;
 pub mod scene;
 pub mod view;
-pub mod workload;
 
 pub use error::{Error, Result};
