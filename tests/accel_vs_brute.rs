@@ -77,8 +77,8 @@ fn course_scenes() {
     }
 }
 
-/// Brute force costs ~5 ms a ray on 202k triangles: it answers about 2,000 of the 100,000 rays, the
-/// grid (bit for bit brute force's answer there) the rest.
+/// Brute force costs ~3 ms of CPU a ray on 202k triangles: it answers about 2,000 of the 100,000 rays,
+/// the grid (bit for bit brute force's answer there) the rest.
 #[test]
 fn stanford_dragon_res2() {
     check_file(
@@ -89,7 +89,7 @@ fn stanford_dragon_res2() {
 }
 
 #[test]
-#[ignore = "exhaustive tier: brute force on all 100,000 rays, about 4 minutes on 2 cores"]
+#[ignore = "exhaustive tier: brute force on all 100,000 rays, 320 s of CPU"]
 fn stanford_dragon_res2_exhaustive() {
     check_file(
         &common::root().join("scenes/models/dragon_vrip_res2.ply.gz"),
@@ -99,7 +99,7 @@ fn stanford_dragon_res2_exhaustive() {
 }
 
 #[test]
-#[ignore = "exhaustive tier: brute force on 10,000 rays over 871k triangles, minutes on 2 cores"]
+#[ignore = "exhaustive tier: brute force on 10,000 rays over 871k triangles, 143 s of CPU"]
 fn stanford_dragon_full_exhaustive() {
     check_file(
         &common::root().join("scenes/dragon_full.p3f"),

@@ -20,7 +20,7 @@ fn render(scene: &Scene, accel: &Accel, size: u32, kernel: Kernel) -> Vec<u8> {
 
 /// The side of the brute-force render a scene's image is compared with: 128, but 24 for scenes of more
 /// than 10,000 primitives (brute force at 128x128 would take minutes) and 8 for more than 500,000 (the
-/// full dragon, where 24x24 takes 20 s: the exhaustive tier renders that,
+/// full dragon, where 24x24 takes 24 s of CPU: the exhaustive tier renders that,
 /// `full_dragon_matches_brute_force_at_24x24`).
 fn brute_size(scene: &Scene) -> u32 {
     match scene.bounded_count() {
@@ -83,7 +83,7 @@ fn check(path: &Path) {
 }
 
 #[test]
-#[ignore = "exhaustive tier: brute force over 871k triangles at 24x24, about 25 s on 2 cores"]
+#[ignore = "exhaustive tier: brute force over 871k triangles at 24x24, 24 s of CPU"]
 fn full_dragon_matches_brute_force_at_24x24() {
     let scene = scene::load(&common::root().join("scenes/dragon_full.p3f")).unwrap();
     let prims = Prims::new(&scene);
