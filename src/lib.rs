@@ -54,6 +54,7 @@ pub mod error;
 pub mod geometry;
 pub mod render;
 pub mod scene;
+#[cfg(feature = "view")]
 pub mod view;
 pub mod workload;
 

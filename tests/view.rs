@@ -1,5 +1,6 @@
 //! `whitted view`: a clear error without a display; under Xvfb (when `xvfb-run` is installed) a real
 //! window whose scripted frames give `render --passes`'s image.
+#![cfg(feature = "view")]
 
 use std::path::Path;
 use std::process::{Command, Output};

@@ -5,6 +5,7 @@ mod bench;
 mod info;
 mod merge;
 mod render;
+#[cfg(feature = "view")]
 mod view;
 
 use std::process::ExitCode;
@@ -32,6 +33,7 @@ enum Command {
     Merge(merge::MergeArgs),
     /// Open a window on a scene (the built-in default scene if none is given), rendered as the camera
     /// moves and refined while it stands still (`whitted view --help` lists the keys).
+    #[cfg(feature = "view")]
     View(view::ViewArgs),
 }
 
@@ -61,6 +63,7 @@ pub fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Merge(args) => merge::run(&args),
+        #[cfg(feature = "view")]
         Command::View(args) => view::run(&args),
     };
     match result {
