@@ -1,4 +1,4 @@
-//! Distribution ray tracing (`src/render/sampler.rs`, `camera.rs`, `shade.rs`, `progressive.rs`):
+//! Distribution ray tracing (`src/render/sampler.rs`, `camera.rs`, `whitted.rs`, `progressive.rs`):
 //! soft shadows against their closed-form visible fraction, depth of field against the pinhole image on
 //! the focal plane and against the circle of confusion off it, reproducibility across threads and
 //! kernels, progressive passes and Ctrl-C from the command line.

@@ -89,7 +89,7 @@ impl RayCamera {
 mod tests {
     use super::*;
 
-    /// The dragon workload's camera formula (`shared/bench/dragon-workload.md`), pixel by pixel.
+    /// The dragon workload's camera formula (`docs/dragon-workload.md`), pixel by pixel.
     #[test]
     #[allow(clippy::excessive_precision)] // the workload document's figures, as written
     fn matches_the_workload_formula() {

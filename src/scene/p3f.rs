@@ -1,6 +1,6 @@
 //! The `.p3f` / NFF scene parser: one function per keyword, reading tokens (never lines) from the
 //! streaming [`Lexer`], so a polygon may spread over any number of lines and a 3 MB scene never sits in
-//! memory as text. The grammar is `shared/formats/p3f.md` (Haines' NFF plus the course's extensions).
+//! memory as text. The grammar is `docs/scene-format.md` (Haines' NFF plus the course's extensions).
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
