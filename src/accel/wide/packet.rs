@@ -210,8 +210,8 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
-    use crate::accel::prims::Hit;
     use crate::accel::policy::{AnyHit, Closest};
+    use crate::accel::prims::Hit;
     use crate::accel::prims::Prims;
     use crate::accel::wide::Bvh4;
     use crate::geometry::ray::Ray;
