@@ -18,6 +18,7 @@ pub mod env;
 pub mod film;
 pub mod frame;
 pub mod light;
+pub mod memory;
 pub mod optics;
 mod options;
 pub mod packets;
@@ -28,5 +29,5 @@ pub mod tiles;
 pub mod whitted;
 
 pub use frame::Renderer;
-pub use options::{Kernel, Options};
+pub use options::{Kernel, MAX_DEPTH, MAX_SPP, Options};
 pub use whitted::RayCounts;

@@ -45,7 +45,7 @@ impl Whitted<'_> {
         let blocked = self.shadow_packets(&surfaces, samples);
 
         let bounces: PerRay<Bounces> = std::array::from_fn(|k| match &surfaces[k] {
-            Some(s) => self.bounces(&rays[k], s, depth, &mut samples[k].rng),
+            Some(s) => self.bounces(&rays[k], s, depth, &mut samples[k]),
             None => Bounces::default(),
         });
         for (sample, b) in samples.iter_mut().zip(&bounces) {
