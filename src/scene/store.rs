@@ -10,6 +10,7 @@ use glam::Vec3;
 
 use crate::error::{Error, Result};
 use crate::geometry::aabb::Aabb;
+use crate::geometry::length_and_direction;
 
 /// Index into [`Scene::materials`].
 pub type MaterialId = u32;
@@ -268,16 +269,28 @@ impl Camera {
     pub fn validate(&self) -> std::result::Result<(), CameraError> {
         let fail = |field, message: String| Err(CameraError { field, message });
         let dir = self.at - self.from;
-        if dir.length_squared() <= f32::MIN_POSITIVE {
+        if !dir.is_finite() {
+            return fail(
+                "at",
+                format!(
+                    "\"from\" {} and \"at\" {} are too far apart: their distance overflows single precision",
+                    fmt_vec(self.from),
+                    fmt_vec(self.at)
+                ),
+            );
+        }
+        if dir == Vec3::ZERO {
             return fail(
                 "at",
                 format!("\"from\" and \"at\" are the same point {}", fmt_vec(self.from)),
             );
         }
-        if self.up.length_squared() <= f32::MIN_POSITIVE {
+        if self.up == Vec3::ZERO {
             return fail("up", "\"up\" is the zero vector".into());
         }
-        if dir.normalize().cross(self.up.normalize()).length() < 1e-6 {
+        // Directions scaled before they are squared: a camera 2e19 units from its target is fine.
+        let (forward, up) = (length_and_direction(dir).1, length_and_direction(self.up).1);
+        if forward.cross(up).length() < 1e-6 {
             return fail(
                 "up",
                 format!(
