@@ -30,7 +30,7 @@
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use super::film::{Film, temporary_name};
+use super::film::{Film, write_atomically};
 use super::progressive::{Progressive, area, mean};
 use super::tiles::{self, TILE, Tile};
 use crate::digest;
@@ -189,13 +189,10 @@ impl Part {
 
     /// Writes the part to `path` (under a temporary name first, then renamed: never half a file).
     pub fn write(&self, path: &Path) -> Result<()> {
-        let tmp = temporary_name(path);
-        std::fs::write(&tmp, self.to_bytes())
-            .and_then(|()| std::fs::rename(&tmp, path))
-            .map_err(|e| {
-                let _ = std::fs::remove_file(&tmp);
-                Error::file(path, format!("cannot write the partial file: {e}"))
-            })
+        write_atomically(path, |tmp| {
+            std::fs::write(tmp, self.to_bytes()).map_err(|e| e.to_string())
+        })
+        .map_err(|e| Error::file(path, format!("cannot write the partial file: {e}")))
     }
 
     /// Reads and checks a part written by [`Part::write`].
