@@ -267,6 +267,7 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
         spp: if args.passes > 1 { 1 } else { spp },
         seed: args.seed,
         roughness: args.roughness,
+        spd: false,
     };
     let renderer = Renderer::new(&scene, &accel, options);
     for w in &renderer.warnings {

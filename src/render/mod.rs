@@ -25,6 +25,7 @@ pub mod packets;
 pub mod partial;
 pub mod progressive;
 pub mod sampler;
+pub mod spd;
 pub mod tiles;
 pub mod whitted;
 

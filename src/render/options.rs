@@ -58,6 +58,11 @@ pub struct Options {
     pub seed: u64,
     /// Roughness of the materials whose `f` line does not give one: finite and at least 0.
     pub roughness: f32,
+    /// The Standard Procedural Databases' test procedure ([`super::spd`]): camera rays through pixel
+    /// corners instead of centres, so the frame's `width` × `height` samples are the corners of a
+    /// (`width` − 1) × (`height` − 1) image ([`super::spd::corners_to_pixels`] averages them into it),
+    /// and a total internal reflection spawns its mirror ray whatever the material's `Ks`. Needs spp 0.
+    pub spd: bool,
 }
 
 impl Options {
@@ -71,6 +76,7 @@ impl Options {
             spp: scene.spp,
             seed: 0,
             roughness: 0.0,
+            spd: false,
         }
     }
 
@@ -89,6 +95,12 @@ impl Options {
             return Err(Error::msg(format!(
                 "a depth of {} bounces is more than the most, {MAX_DEPTH}",
                 self.max_depth
+            )));
+        }
+        if self.spd && (self.spp != 0 || self.width < 2 || self.height < 2) {
+            return Err(Error::msg(format!(
+                "the SPD procedure needs spp 0 and at least 2 x 2 corners, found spp {} and {}x{}",
+                self.spp, self.width, self.height
             )));
         }
         if !(self.roughness.is_finite() && self.roughness >= 0.0) {

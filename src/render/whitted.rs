@@ -69,6 +69,8 @@ pub struct Bounces {
 pub struct RayCounts {
     /// Camera rays.
     pub primary: u64,
+    /// Camera rays that hit something (not counted in [`RayCounts::total`]: they are camera rays).
+    pub primary_hits: u64,
     /// Shadow rays (any hit).
     pub shadow: u64,
     /// Mirror rays.
@@ -93,6 +95,7 @@ impl RayCounts {
 impl std::ops::AddAssign for RayCounts {
     fn add_assign(&mut self, o: RayCounts) {
         self.primary += o.primary;
+        self.primary_hits += o.primary_hits;
         self.shadow += o.shadow;
         self.reflected += o.reflected;
         self.refracted += o.refracted;
@@ -138,6 +141,8 @@ pub struct Whitted<'a> {
     roughness: Vec<f32>,
     /// Most bounces after the primary hit.
     max_depth: u32,
+    /// The SPD rules ([`super::spd`]): a total internal reflection always spawns its mirror ray.
+    spd: bool,
 }
 
 impl<'a> Whitted<'a> {
@@ -151,6 +156,7 @@ impl<'a> Whitted<'a> {
         sampled_lights: bool,
         max_depth: u32,
         roughness: f32,
+        spd: bool,
     ) -> Self {
         let (fixed_lights, quads) = if sampled_lights {
             (light::point_samples(scene), &scene.area_lights[..])
@@ -171,6 +177,7 @@ impl<'a> Whitted<'a> {
                 .collect(),
             // Unvalidated options are clamped rather than allowed to overflow the stack.
             max_depth: max_depth.min(MAX_DEPTH),
+            spd,
         }
     }
 
@@ -201,6 +208,7 @@ impl<'a> Whitted<'a> {
         if !hit.is_hit() {
             return self.background.sample(ray.dir);
         }
+        sample.rays.primary_hits += u64::from(depth == 0);
         let surface = self.prims.surface(ray, hit);
         let bounces = self.bounces(ray, &surface, depth, sample);
         sample.rays.add_bounces(&bounces);
@@ -249,7 +257,7 @@ impl<'a> Whitted<'a> {
         let m = &self.scene.materials[surface.material as usize];
         let (p, ng, ns) = (surface.point, surface.geometric, surface.shading);
         // Fresnel splits light between the mirror and the refracted ray; opaque surfaces reflect Ks.
-        let mut kr = 1.0;
+        let (mut kr, mut total_internal) = (1.0, false);
         if m.transmission > 0.0 {
             let (eta_i, eta_t) = if surface.inside {
                 (m.ior, 1.0)
@@ -265,9 +273,15 @@ impl<'a> Whitted<'a> {
                 }
             } else {
                 kr = 1.0;
+                total_internal = true;
             }
         }
-        let weight = m.ks * kr;
+        let weight = if total_internal && self.spd {
+            // The SPD rule: the light that found no way out is all reflected, whatever Ks says.
+            m.ks + m.transmission
+        } else {
+            m.ks * kr
+        };
         if weight > 0.0 {
             let mirror = reflect(ray.dir, ns).normalize();
             let roughness = self.roughness[surface.material as usize];
