@@ -11,6 +11,7 @@ pub mod env;
 pub mod film;
 pub mod light;
 pub mod optics;
+mod options;
 mod packets;
 pub mod partial;
 pub mod progressive;
@@ -34,63 +35,7 @@ use sampler::{PixelPattern, Sampler};
 use shade::{PixelSample, RayCounts};
 use tiles::{TILE, Tile};
 
-/// How camera rays are traced.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Kernel {
-    /// One ray at a time.
-    Single,
-    /// Camera rays in packets of 8 (4x2 pixels) through the wide BVHs' packet kernel, and their hits'
-    /// shadow rays in packets per light sample; other accelerators, and the reflected and refracted
-    /// rays, go one at a time. The image is identical to `Single`'s.
-    Packet,
-}
-
-impl std::str::FromStr for Kernel {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "single" => Ok(Kernel::Single),
-            "packet" => Ok(Kernel::Packet),
-            _ => Err(format!("unknown kernel \"{s}\": expected single or packet")),
-        }
-    }
-}
-
-/// What to render, beyond the scene itself.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Options {
-    /// Image width in pixels.
-    pub width: u32,
-    /// Image height in pixels.
-    pub height: u32,
-    /// Most bounces after the primary hit; at the limit only the local colour is computed.
-    pub max_depth: u32,
-    /// Single rays or packets for the camera rays.
-    pub kernel: Kernel,
-    /// Samples per pixel: 0 for one ray through the centre; otherwise n × n jittered samples (a count
-    /// that is not a square is rounded up to the next one).
-    pub spp: u32,
-    /// Seed of every random number of the frame.
-    pub seed: u64,
-    /// Roughness of the materials whose `f` line does not give one.
-    pub roughness: f32,
-}
-
-impl Options {
-    /// The scene's own resolution and samples per pixel, 6 bounces, seed 0, mirrors sharp.
-    pub fn new(scene: &Scene) -> Self {
-        Options {
-            width: scene.camera.width,
-            height: scene.camera.height,
-            max_depth: 6,
-            kernel: Kernel::Packet,
-            spp: scene.spp,
-            seed: 0,
-            roughness: 0.0,
-        }
-    }
-}
+pub use options::{Kernel, Options};
 
 /// Everything a worker needs to shade a pixel, set up once per frame and shared read-only.
 pub struct Renderer<'a> {
