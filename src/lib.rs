@@ -39,6 +39,7 @@ pub mod accel;
 pub mod digest;
 pub mod error;
 pub mod geometry;
+pub mod parts;
 pub mod render;
 pub mod scene;
 pub mod view;

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use whitted::accel::{Accel, AccelKind, Prims};
-use whitted::render::partial::{Part, Settings};
+use whitted::parts::partial::{Part, Settings};
 use whitted::render::progressive::Progressive;
 use whitted::render::{Kernel, Options, Renderer, tiles};
 use whitted::scene::{self, Scene, check_resolution};
@@ -293,18 +293,7 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
     });
     let out = Output {
         args,
-        partial: partial.then(|| Settings {
-            scene: scene.fingerprint(),
-            width,
-            height,
-            spp: options.spp,
-            seed: options.seed,
-            max_depth: options.max_depth,
-            aperture: scene.camera.aperture,
-            focal: scene.camera.focal,
-            roughness: options.roughness,
-            passes: args.passes,
-        }),
+        partial: partial.then(|| Settings::new(&scene, &options, args.passes)),
         first,
     };
     if let (true, Some(settings)) = (args.resume, out.partial) {

@@ -13,7 +13,6 @@ pub mod light;
 pub mod optics;
 mod options;
 mod packets;
-pub mod partial;
 pub mod progressive;
 pub mod sampler;
 pub mod shade;
