@@ -10,7 +10,7 @@ use whitted::accel::{Accel, Prims};
 use whitted::render::shade::RayCounts;
 use whitted::render::{Options, Renderer};
 
-use super::render::{FrameArgs, load_scene, resolution, thread_pool};
+use super::args::{FrameArgs, load_scene, resolution, thread_pool};
 
 /// Arguments of `whitted bench`.
 #[derive(Args)]

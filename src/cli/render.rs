@@ -1,21 +1,20 @@
 //! `whitted render`: a scene to an image.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use whitted::accel::{Accel, AccelKind, Prims};
+use whitted::accel::{Accel, Prims};
 use whitted::parts::partial::{Part, Settings};
 use whitted::render::progressive::Progressive;
-use whitted::render::{Kernel, Options, Renderer, tiles};
-use whitted::scene::{self, Scene, check_resolution};
+use whitted::render::{Options, Renderer, tiles};
 
-use super::{BuildKind, build_options};
-
-/// The scene `render` draws when given none, compiled into the binary so the first command works anywhere.
-const DEFAULT_SCENE: &str = include_str!("../../scenes/default.p3f");
+use super::args::{
+    BuildKind, FrameArgs, build_options, load_scene, non_negative, part_of, pass_range, positive, resolution,
+    thread_pool,
+};
 
 /// Arguments of `whitted render`.
 #[derive(Args)]
@@ -84,118 +83,8 @@ pub struct RenderArgs {
     quiet: bool,
 }
 
-fn number(s: &str) -> Result<f32, String> {
-    let v: f32 = s
-        .parse()
-        .map_err(|_| format!("expected a number, found \"{s}\""))?;
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        Err(format!("expected a finite number, found {s}"))
-    }
-}
-
-fn non_negative(s: &str) -> Result<f32, String> {
-    let v = number(s)?;
-    if v >= 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("expected a number of at least 0, found {s}"))
-    }
-}
-
-fn positive(s: &str) -> Result<f32, String> {
-    let v = number(s)?;
-    if v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("expected a number above 0, found {s}"))
-    }
-}
-
-/// Two numbers `a` and `b` written `a{sep}b`; `expected` says what the whole should look like.
-fn u32_pair(s: &str, sep: &str, expected: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("expected {expected}; found \"{s}\"");
-    let (a, b) = s.split_once(sep).ok_or_else(bad)?;
-    Ok((
-        a.trim().parse().map_err(|_| bad())?,
-        b.trim().parse().map_err(|_| bad())?,
-    ))
-}
-
-/// `K/N` with K < N.
-fn part_of(s: &str) -> Result<(u32, u32), String> {
-    let (k, n) = u32_pair(s, "/", "K/N, part K (from 0) of N parts, such as 3/8")?;
-    if n == 0 || k >= n {
-        return Err(format!("part {k}/{n} does not exist: K counts from 0 to N-1"));
-    }
-    Ok((k, n))
-}
-
-/// `A..B` with A < B.
-fn pass_range(s: &str) -> Result<(u32, u32), String> {
-    let (a, b) = u32_pair(s, "..", "A..B, passes A to B-1 (from 0), such as 0..16")?;
-    if a >= b {
-        return Err(format!("the pass range {a}..{b} is empty"));
-    }
-    Ok((a, b))
-}
-
 /// Set by Ctrl-C: the render stops at the next tile and keeps the last complete pass.
 static STOP: AtomicBool = AtomicBool::new(false);
-
-/// The frame's size, the threads and the structure and kernel that trace it (`render` and `bench`).
-#[derive(Args)]
-pub struct FrameArgs {
-    /// Image width (keeps the vertical field of view; the height follows the aspect ratio if not given).
-    #[arg(long)]
-    pub width: Option<u32>,
-    /// Image height.
-    #[arg(long)]
-    pub height: Option<u32>,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
-    /// Acceleration structure: none, grid, bvh2, bvh4, bvh8 (8-wide nodes, AVX2 where the CPU has it)
-    /// or auto (bvh8 on CPUs with AVX2, else bvh4).
-    #[arg(long, default_value = "auto")]
-    pub accel: AccelKind,
-    /// Camera rays one at a time (single) or in packets of 8 (packet, BVH4 and BVH8; same image).
-    #[arg(long, default_value = "packet")]
-    pub kernel: Kernel,
-}
-
-/// Loads the named scene, or the built-in one.
-pub fn load_scene(path: Option<&Path>) -> whitted::Result<Scene> {
-    match path {
-        Some(p) => scene::load(p),
-        None => scene::p3f::parse(Path::new("(default scene)"), Box::new(DEFAULT_SCENE.as_bytes())),
-    }
-}
-
-/// The resolution after `--width`/`--height`: one given alone keeps the file's aspect ratio.
-pub fn resolution(scene: &Scene, width: Option<u32>, height: Option<u32>) -> whitted::Result<(u32, u32)> {
-    let (fw, fh) = (scene.camera.width as u64, scene.camera.height as u64);
-    let (w, h) = match (width, height) {
-        (Some(w), Some(h)) => (w, h),
-        (Some(w), None) => (w, ((w as u64 * fh).div_ceil(fw)).min(u32::MAX as u64) as u32),
-        (None, Some(h)) => (((h as u64 * fw).div_ceil(fh)).min(u32::MAX as u64) as u32, h),
-        (None, None) => (fw as u32, fh as u32),
-    };
-    check_resolution(w, h).map_err(whitted::Error::msg)?;
-    Ok((w, h))
-}
-
-/// A rayon pool of `threads` workers (all cores when `None`).
-pub fn thread_pool(threads: Option<usize>) -> whitted::Result<rayon::ThreadPool> {
-    if threads == Some(0) {
-        return Err(whitted::Error::msg("--threads must be at least 1"));
-    }
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.unwrap_or(0))
-        .build()
-        .map_err(|e| whitted::Error::msg(format!("cannot start the worker threads: {e}")))
-}
 
 /// Renders and writes the image.
 pub fn run(args: &RenderArgs) -> whitted::Result<()> {

@@ -6,7 +6,7 @@ use clap::Args;
 use whitted::render::Options;
 use whitted::view::{self, Config, state::MAX_DEPTH};
 
-use super::render::{FrameArgs, load_scene, resolution, thread_pool};
+use super::args::{FrameArgs, load_scene, resolution, thread_pool};
 
 /// Arguments of `whitted view`.
 #[derive(Args)]
