@@ -6,7 +6,7 @@ use std::path::Path;
 use clap::Args;
 use whitted::accel::AccelKind;
 use whitted::render::Kernel;
-use whitted::scene::{self, Scene, check_resolution};
+use whitted::scene::{self, Scene};
 
 /// The scene drawn when none is given, compiled into the binary so the first command works anywhere.
 const DEFAULT_SCENE: &str = include_str!("../../scenes/default.p3f");
@@ -58,24 +58,29 @@ pub fn load_scene(path: Option<&Path>) -> whitted::Result<Scene> {
     }
 }
 
-/// The resolution after `--width`/`--height`: one given alone keeps the file's aspect ratio.
-pub fn resolution(scene: &Scene, width: Option<u32>, height: Option<u32>) -> whitted::Result<(u32, u32)> {
+/// The resolution after `--width`/`--height`: one given alone keeps the file's aspect ratio. It is
+/// checked with the rest of the [`whitted::render::Options`] it goes into.
+pub fn resolution(scene: &Scene, width: Option<u32>, height: Option<u32>) -> (u32, u32) {
     let (fw, fh) = (scene.camera.width as u64, scene.camera.height as u64);
-    let (w, h) = match (width, height) {
+    match (width, height) {
         (Some(w), Some(h)) => (w, h),
         (Some(w), None) => (w, ((w as u64 * fh).div_ceil(fw)).min(u32::MAX as u64) as u32),
         (None, Some(h)) => (((h as u64 * fw).div_ceil(fh)).min(u32::MAX as u64) as u32, h),
         (None, None) => (fw as u32, fh as u32),
-    };
-    check_resolution(w, h).map_err(whitted::Error::msg)?;
-    Ok((w, h))
+    }
+}
+
+/// Checks `--threads` (`None` is all cores), before the pool is started.
+pub fn check_threads(threads: Option<usize>) -> whitted::Result<()> {
+    if threads == Some(0) {
+        return Err(whitted::Error::msg("--threads must be at least 1"));
+    }
+    Ok(())
 }
 
 /// A rayon pool of `threads` workers (all cores when `None`).
 pub fn thread_pool(threads: Option<usize>) -> whitted::Result<rayon::ThreadPool> {
-    if threads == Some(0) {
-        return Err(whitted::Error::msg("--threads must be at least 1"));
-    }
+    check_threads(threads)?;
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()

@@ -5,6 +5,7 @@ mod args;
 mod bench;
 mod info;
 mod merge;
+mod plan;
 mod render;
 mod view;
 
