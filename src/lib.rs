@@ -52,6 +52,7 @@ pub mod accel;
 pub mod digest;
 pub mod error;
 pub mod geometry;
+pub mod parts;
 pub mod render;
 pub mod scene;
 #[cfg(feature = "view")]

@@ -10,7 +10,7 @@ use whitted::accel::{Accel, Prims};
 use whitted::render::RayCounts;
 use whitted::render::{Options, Renderer};
 
-use super::render::{FrameArgs, load_scene, resolution, thread_pool};
+use super::args::{FrameArgs, load_scene, resolution, thread_pool};
 
 /// Arguments of `whitted bench`.
 #[derive(Args)]
@@ -45,9 +45,7 @@ fn default_scene() -> PathBuf {
 pub fn run(args: &BenchArgs) -> whitted::Result<()> {
     let path = args.scene.clone().unwrap_or_else(default_scene);
     let scene = load_scene(Some(&path))?;
-    let (width, height) = resolution(&scene, args.frame.width, args.frame.height)?;
-    let pool = thread_pool(args.frame.threads)?;
-    let accel = pool.install(|| Accel::build(Prims::new(&scene), args.frame.accel));
+    let (width, height) = resolution(&scene, args.frame.width, args.frame.height);
     let options = Options {
         width,
         height,
@@ -55,25 +53,22 @@ pub fn run(args: &BenchArgs) -> whitted::Result<()> {
         spp: args.spp.unwrap_or(scene.spp),
         ..Options::new(&scene)
     };
+    options.validate()?;
+    let pool = thread_pool(args.frame.threads)?;
+    let accel = pool.install(|| Accel::build(Prims::new(&scene), args.frame.accel));
     let renderer = Renderer::new(&scene, &accel, options);
     let never = AtomicBool::new(false);
     // Every frame is pass 1: the same rays, so the frames time the same work.
     let frame = || pool.install(|| renderer.render_pass(1, &|| {}, &never).expect("never stopped"));
     let (_, rays) = frame();
-    let mut ms: Vec<f64> = (0..args.frames)
+    let ms: Vec<f64> = (0..args.frames)
         .map(|_| {
             let start = Instant::now();
             frame();
             start.elapsed().as_secs_f64() * 1e3
         })
         .collect();
-    ms.sort_by(f64::total_cmp);
-    let median = if ms.len() % 2 == 1 {
-        ms[ms.len() / 2]
-    } else {
-        (ms[ms.len() / 2 - 1] + ms[ms.len() / 2]) / 2.0
-    };
-    let (min, max) = (ms[0], ms[ms.len() - 1]);
+    let (median, min, max) = spread(ms);
     let fps = 1e3 / median;
     let mrays = rays.total() as f64 / median / 1e3;
     let threads = pool.current_num_threads();
@@ -103,6 +98,17 @@ pub fn run(args: &BenchArgs) -> whitted::Result<()> {
         );
     }
     Ok(())
+}
+
+/// The median, least and most of the frame times `ms` (at least one).
+fn spread(mut ms: Vec<f64>) -> (f64, f64, f64) {
+    ms.sort_by(f64::total_cmp);
+    let median = if ms.len() % 2 == 1 {
+        ms[ms.len() / 2]
+    } else {
+        (ms[ms.len() / 2 - 1] + ms[ms.len() / 2]) / 2.0
+    };
+    (median, ms[0], ms[ms.len() - 1])
 }
 
 /// The `--json` object.

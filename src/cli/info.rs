@@ -7,7 +7,7 @@ use clap::Args;
 use whitted::accel::{Accel, AccelKind, Prims};
 use whitted::scene::{self, Scene};
 
-use super::{BuildKind, build_options};
+use super::args::{BuildKind, build_options};
 
 /// Arguments of `whitted info`.
 #[derive(Args)]

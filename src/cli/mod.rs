@@ -1,9 +1,11 @@
 //! Command-line interface: parses arguments with clap and calls the library. Every failure is one line on
 //! stderr, `whitted: path:line:col: message`, and exit status 1; clap's usage errors exit with 2.
 
+mod args;
 mod bench;
 mod info;
 mod merge;
+mod plan;
 mod render;
 #[cfg(feature = "view")]
 mod view;
@@ -35,24 +37,6 @@ enum Command {
     /// moves and refined while it stands still (`whitted view --help` lists the keys).
     #[cfg(feature = "view")]
     View(view::ViewArgs),
-}
-
-/// The BVH2 builder, as a command-line value.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum BuildKind {
-    /// Binned surface area heuristic.
-    Sah,
-    /// Centroid midpoint of the longest axis.
-    Midpoint,
-}
-
-/// The library's build options from the command line's.
-pub fn build_options(build: BuildKind, bins: usize) -> whitted::accel::BuildOptions {
-    let builder = match build {
-        BuildKind::Sah => whitted::accel::bvh2::Builder::Sah { bins },
-        BuildKind::Midpoint => whitted::accel::bvh2::Builder::Midpoint,
-    };
-    whitted::accel::BuildOptions { builder, bins }
 }
 
 /// Runs the command line and turns errors into a message and an exit status.

@@ -22,7 +22,6 @@ pub mod memory;
 pub mod optics;
 mod options;
 pub mod packets;
-pub mod partial;
 pub mod progressive;
 pub mod sampler;
 pub mod spd;

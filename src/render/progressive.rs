@@ -6,7 +6,7 @@
 //! of a few thousand `f32` values is exact in `f64`'s 53 bits, so the mean does not drift with n as the
 //! incremental `f32` form does, and, unlike a mean, sums of passes rendered apart (on other machines, or
 //! other days) add up to exactly the sum of all of them. That is what makes a frame split into pass
-//! ranges ([`super::partial`]) merge into the same image as one long render.
+//! ranges ([`crate::parts`]) merge into the same image as one long render.
 //!
 //! A `Progressive` covers the whole frame or a subset of its tiles (`--tiles K/N`).
 

@@ -1,13 +1,7 @@
-//! Parts of a frame rendered apart (on the nodes of a cluster, by the jobs of an array) and merged into
-//! the one image a single machine would have made.
+//! The `.partial` file: one part's sums of its passes, headed by every setting that changes the image,
+//! so that parts of different renders are never merged.
 //!
-//! A part is a subset of the frame's tiles ([`tiles::part`], `--tiles K/N`) over a range of its passes
-//! (`--passes-range A..B`: passes A to B−1, counted from 0). Since a pixel's random numbers depend only
-//! on (seed, pixel, pass) ([`super::sampler`]), a part's pixels are exactly those the whole render
-//! computes, and since parts keep `f64` sums rather than means ([`Progressive`]), merging adds them up
-//! to the whole render's sums.
-//!
-//! # The `.partial` file (version 1)
+//! # Version 1
 //! Little-endian throughout:
 //!
 //! | bytes | field |
@@ -28,14 +22,15 @@
 //! field's range, so a truncated, bit-flipped or foreign file is named and refused, never half-used.
 
 use std::ops::Range;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use super::film::{Film, write_atomically};
-use super::progressive::{Progressive, area, mean};
-use super::tiles::{self, TILE, Tile};
 use crate::digest;
 use crate::error::{Error, Result};
-use crate::scene::check_resolution;
+use crate::render::Options;
+use crate::render::film::write_atomically;
+use crate::render::progressive::{Progressive, area};
+use crate::render::tiles::{self, TILE};
+use crate::scene::{Scene, check_resolution};
 
 const MAGIC: &[u8; 8] = b"WHTPART\n";
 const VERSION: u32 = 1;
@@ -70,8 +65,25 @@ pub struct Settings {
 }
 
 impl Settings {
+    /// The settings of a render of `scene` (its camera's lens included, after any override) with
+    /// `options`, in `passes` passes of `options.spp` samples each.
+    pub fn new(scene: &Scene, options: &Options, passes: u32) -> Self {
+        Settings {
+            scene: scene.fingerprint(),
+            width: options.width,
+            height: options.height,
+            spp: options.spp,
+            seed: options.seed,
+            max_depth: options.max_depth,
+            aperture: scene.camera.aperture,
+            focal: scene.camera.focal,
+            roughness: options.roughness,
+            passes,
+        }
+    }
+
     /// The fields in which `self` and `other` differ, as `name a vs b`.
-    fn differences(&self, other: &Settings) -> Vec<String> {
+    pub(super) fn differences(&self, other: &Settings) -> Vec<String> {
         let mut out = Vec::new();
         let mut check = |name: &str, a: String, b: String| {
             if a != b {
@@ -351,155 +363,11 @@ impl Reader<'_> {
     }
 }
 
-/// Reads the parts and merges them into the frame, after checking that they are parts of one render
-/// and cover each pixel's passes exactly once; every error names the file(s) at fault.
-pub fn merge(paths: &[PathBuf]) -> Result<Film> {
-    let Some(first_path) = paths.first() else {
-        return Err(Error::msg("no partial files to merge"));
-    };
-    let mut parts = Vec::with_capacity(paths.len());
-    for path in paths {
-        parts.push((path.as_path(), Part::read(path)?));
-    }
-    let settings = parts[0].1.settings;
-    for (path, part) in &parts[1..] {
-        let diff = settings.differences(&part.settings);
-        if !diff.is_empty() {
-            return Err(Error::file(
-                path,
-                format!(
-                    "not a part of the same render as {}: {}",
-                    first_path.display(),
-                    diff.join(", ")
-                ),
-            ));
-        }
-    }
-    check_coverage(&parts, &settings)?;
-
-    // Sum in pass order (then tile order), whatever order the files were named in, so that the
-    // result does not depend on it.
-    parts.sort_by_key(|(_, p)| (p.passes.start, p.tiles.first().copied()));
-    let (w, h) = (settings.width, settings.height);
-    let grid = tiles::tiles(w, h);
-    let mut sums = vec![[0.0f64; 3]; w as usize * h as usize];
-    let mut counts = vec![0u32; sums.len()];
-    for (_, part) in &parts {
-        let mut at = 0;
-        for &i in &part.tiles {
-            let t = grid[i as usize];
-            for y in t.y0..t.y1 {
-                for x in t.x0..t.x1 {
-                    let p = (y * w + x) as usize;
-                    for (s, v) in sums[p].iter_mut().zip(part.sums[at]) {
-                        *s += v;
-                    }
-                    counts[p] += part.counts[at];
-                    at += 1;
-                }
-            }
-        }
-    }
-    let mut film = Film::new(w, h);
-    for ((pixel, sum), n) in film.pixels.iter_mut().zip(&sums).zip(&counts) {
-        *pixel = mean(*sum, f64::from(*n));
-    }
-    Ok(film)
-}
-
-/// Checks that every tile's passes `0..settings.passes` are covered by exactly one part each.
-fn check_coverage(parts: &[(&Path, Part)], settings: &Settings) -> Result<()> {
-    let grid = tiles::tiles(settings.width, settings.height);
-    // Per tile, the pass ranges covering it and the part each came from.
-    let mut cover: Vec<Vec<(Range<u32>, usize)>> = vec![Vec::new(); grid.len()];
-    for (k, (_, part)) in parts.iter().enumerate() {
-        for &i in &part.tiles {
-            cover[i as usize].push((part.passes.clone(), k));
-        }
-    }
-    let mut overlaps: Vec<(usize, usize, Range<u32>)> = Vec::new();
-    // Missing pass ranges, with the tiles they are missing from.
-    let mut gaps: Vec<(Range<u32>, Vec<Tile>)> = Vec::new();
-    for (tile, ranges) in grid.iter().zip(&mut cover) {
-        ranges.sort_by_key(|(r, _)| (r.start, r.end));
-        let mut next = 0;
-        let mut last: Option<usize> = None;
-        let mut missing = |range: Range<u32>| match gaps.iter_mut().find(|(r, _)| *r == range) {
-            Some((_, tiles)) => tiles.push(*tile),
-            None => gaps.push((range, vec![*tile])),
-        };
-        for (range, k) in ranges.iter() {
-            if range.start < next {
-                let pair = (
-                    last.expect("a range before"),
-                    *k,
-                    range.start..next.min(range.end),
-                );
-                if !overlaps.iter().any(|(a, b, _)| (*a, *b) == (pair.0, pair.1)) {
-                    overlaps.push(pair);
-                }
-            } else if range.start > next {
-                missing(next..range.start);
-            }
-            if range.end > next {
-                next = range.end;
-                last = Some(*k);
-            }
-        }
-        if next < settings.passes {
-            missing(next..settings.passes);
-        }
-    }
-    if overlaps.is_empty() && gaps.is_empty() {
-        return Ok(());
-    }
-    let mut problems = Vec::new();
-    for (a, b, range) in overlaps.iter().take(4) {
-        problems.push(format!(
-            "{} and {} overlap (both render passes {}..{} of some tiles)",
-            parts[*a].0.display(),
-            parts[*b].0.display(),
-            range.start,
-            range.end
-        ));
-    }
-    for (range, tiles) in gaps.iter().take(4) {
-        let t = tiles[0];
-        problems.push(format!(
-            "no part renders passes {}..{} of {} tile(s), e.g. pixels x {}..{}, y {}..{}",
-            range.start,
-            range.end,
-            tiles.len(),
-            t.x0,
-            t.x1,
-            t.y0,
-            t.y1
-        ));
-    }
-    let more = overlaps.len().saturating_sub(4) + gaps.len().saturating_sub(4);
-    if more > 0 {
-        problems.push(format!("and {more} more"));
-    }
-    // With every part of one K/N split, name the missing parts: that is what to render again.
-    let n = parts[0].1.part.1;
-    if !gaps.is_empty() && n > 1 && parts.iter().all(|(_, p)| p.part.1 == n) {
-        let missing: Vec<String> = (0..n)
-            .filter(|k| !parts.iter().any(|(_, p)| p.part.0 == *k))
-            .map(|k| format!("{k}/{n}"))
-            .collect();
-        if !missing.is_empty() {
-            problems.push(format!("missing part(s) --tiles {}", missing.join(", ")));
-        }
-    }
-    Err(Error::msg(format!(
-        "the parts do not cover the frame exactly once: {}; nothing written",
-        problems.join("; ")
-    )))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Camera;
+    use glam::Vec3;
 
     fn part() -> Part {
         let settings = Settings {
@@ -525,6 +393,33 @@ mod tests {
             sums: (0..pixels).map(|i| [i as f64, 0.5, -1.0]).collect(),
             counts: vec![2; pixels],
         }
+    }
+
+    #[test]
+    fn settings_take_the_options_and_the_camera_lens() {
+        let mut scene = Scene::new(Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 45.0, 8, 8));
+        (scene.camera.aperture, scene.camera.focal) = (2.5, 0.75);
+        let options = Options {
+            width: 20,
+            height: 18,
+            spp: 1,
+            seed: 3,
+            roughness: 0.25,
+            ..Options::new(&scene)
+        };
+        let expected = Settings {
+            scene: scene.fingerprint(),
+            width: 20,
+            height: 18,
+            spp: 1,
+            seed: 3,
+            max_depth: 6,
+            aperture: 2.5,
+            focal: 0.75,
+            roughness: 0.25,
+            passes: 4,
+        };
+        assert_eq!(Settings::new(&scene, &options, 4), expected);
     }
 
     #[test]
