@@ -293,8 +293,28 @@ fn scale_out_recipes_run_as_written() {
         std::fs::read(d.join("dragon.png")).unwrap() == single,
         "Slurm recipe"
     );
-    // Rerun: every part is whole, so nothing is rendered again.
+    // Rerun: every part is whole, so none is written again (a rewrite renames a new file into place,
+    // which changes its inode), and the merge gives the same image.
+    let inodes = |d: &Path| {
+        use std::os::unix::fs::MetadataExt;
+        let mut v: Vec<_> = std::fs::read_dir(d.join("parts"))
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                (e.file_name(), e.metadata().unwrap().ino())
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    let before = inodes(d);
+    assert_eq!(before.len(), 32, "the loop writes 32 parts");
     bash(d, &recipe("loop"), &env);
+    assert_eq!(inodes(d), before, "--resume rendered a whole part again");
+    assert!(
+        std::fs::read(d.join("dragon.png")).unwrap() == single,
+        "Slurm recipe, rerun"
+    );
 
     let has_parallel = Command::new("parallel")
         .arg("--version")
