@@ -78,12 +78,37 @@ fn apply(mut bytes: Vec<u8>, edits: &[Edit]) -> Vec<u8> {
     bytes
 }
 
+/// Nothing but white space and `#` comments (the readers' one tokenizer skips both): the one input
+/// whose error names the whole file rather than a place in it.
+fn blank(bytes: &[u8]) -> bool {
+    bytes.split(|&b| b == b'\n').all(|l| {
+        l.split(|&b| b == b'#')
+            .next()
+            .unwrap()
+            .iter()
+            .all(u8::is_ascii_whitespace)
+    })
+}
+
 fn check_scene(bytes: Vec<u8>) {
+    let lines = bytes.iter().filter(|&&b| b == b'\n').count() as u32 + 1;
+    let blank = blank(&bytes);
     match p3f::parse(Path::new("fuzz.p3f"), Box::new(std::io::Cursor::new(bytes))) {
         Ok(scene) => assert!(scene.camera.validate().is_ok()),
         Err(e) => {
             assert!(!e.message.is_empty());
             assert_eq!(e.path.as_deref(), Some(Path::new("fuzz.p3f")));
+            // A scene error says where: a line of the file and a column on it.
+            match e.location {
+                Location::LineCol(line, col) => {
+                    assert!(
+                        (1..=lines).contains(&line) && col >= 1,
+                        "{e}: outside the file's {lines} lines"
+                    )
+                }
+                Location::File => assert!(blank, "{e}: no line:col, yet the file has tokens"),
+                Location::Byte(_) => panic!("{e}: a byte offset into a text scene"),
+            }
         }
     }
 }
@@ -134,7 +159,7 @@ property float z\nelement face 2\nproperty list uchar uint vertex_indices\nend_h
     out
 }
 
-fn check_ply(bytes: &[u8], gzip: bool) {
+fn check_ply(bytes: &[u8], gzip: bool, binary: bool) {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join(if gzip { "m.ply.gz" } else { "m.ply" });
     let mut file = std::fs::File::create(&path).unwrap();
@@ -156,11 +181,13 @@ fn check_ply(bytes: &[u8], gzip: bool) {
         Err(e) => {
             assert!(!e.message.is_empty());
             assert!(e.path.is_some());
-            // Errors inside the data say where.
-            assert!(matches!(
-                e.location,
-                Location::LineCol(..) | Location::Byte(_) | Location::File
-            ));
+            // Errors say where: a line and column of the (text) header or of ascii data, a byte
+            // offset into binary data; the whole file only when there is nothing in it.
+            match e.location {
+                Location::LineCol(line, col) => assert!(line >= 1 && col >= 1, "{e}"),
+                Location::Byte(_) => assert!(binary, "{e}: a byte offset into an ascii file"),
+                Location::File => assert!(blank(bytes), "{e}: no location, yet the file has words"),
+            }
         }
     }
 }
@@ -170,11 +197,11 @@ proptest! {
 
     #[test]
     fn ply_ascii_survives_mutations(edits in prop::collection::vec(edit(), 1..5), gzip in any::<bool>()) {
-        check_ply(&apply(ply_ascii(), &edits), gzip);
+        check_ply(&apply(ply_ascii(), &edits), gzip, false);
     }
 
     #[test]
     fn ply_binary_survives_mutations(edits in prop::collection::vec(edit(), 1..5), gzip in any::<bool>()) {
-        check_ply(&apply(ply_binary(), &edits), gzip);
+        check_ply(&apply(ply_binary(), &edits), gzip, true);
     }
 }

@@ -166,7 +166,12 @@ fn read_header(lx: &mut Lexer) -> Result<Header> {
     match lx.next_token()? {
         Some(tok) if tok.line == 1 && lx.text(&tok) == b"ply" => {}
         Some(tok) => return Err(lx.error_at(&tok, format!("{MAGIC}, found {}", show(lx.text(&tok))))),
-        None => return Err(Error::file(lx.path(), format!("{MAGIC}, found an empty file"))),
+        None => {
+            return Err(Error::file(
+                lx.path(),
+                format!("{MAGIC}, found nothing but white space"),
+            ));
+        }
     }
     let mut format = None;
     let mut elements: Vec<Element> = Vec::new();
