@@ -1,12 +1,14 @@
-//! What the subcommands share: the frame's arguments, the scene they load, the threads they render on,
-//! and the parsers of their numbers.
+//! What the subcommands share: the frame's arguments, the SPD procedure's frame, the scene they load, the threads they render on, and the parsers of their numbers.
 
 use std::path::Path;
 
 use clap::Args;
 use whitted::accel::AccelKind;
-use whitted::render::Kernel;
+use whitted::render::film::Film;
+use whitted::render::{Kernel, Options, spd};
 use whitted::scene::{self, Scene};
+
+use super::render::RenderArgs;
 
 /// The scene drawn when none is given, compiled into the binary so the first command works anywhere.
 const DEFAULT_SCENE: &str = include_str!("../../scenes/default.p3f");
@@ -30,6 +32,67 @@ pub struct FrameArgs {
     /// Camera rays one at a time (single) or in packets of 8 (packet, BVH4 and BVH8; same image).
     #[arg(long, default_value = "packet")]
     pub kernel: Kernel,
+}
+
+/// The bounce limit when `--max-depth` is not given.
+pub const DEFAULT_DEPTH: u32 = 6;
+
+/// The options of the SPD test procedure ([`spd::options`]: 513 x 513 corner rays, spp 0, 4 bounces)
+/// in place of `options` when `spd`, keeping what the procedure leaves open (kernel, seed, roughness).
+pub fn spd_frame(spd: bool, options: Options, scene: &Scene) -> Options {
+    if !spd {
+        return options;
+    }
+    Options {
+        kernel: options.kernel,
+        seed: options.seed,
+        roughness: options.roughness,
+        ..spd::options(scene)
+    }
+}
+
+/// The image of a frame rendered with `options`: an SPD frame's corners averaged into its pixels.
+pub fn image(options: &Options, film: Film) -> Film {
+    if options.spd {
+        spd::corners_to_pixels(&film)
+    } else {
+        film
+    }
+}
+
+/// Refuses, with `--spd`, the first of the options `given` (its name, and whether it was given): the
+/// procedure fixes the frame they would change, and the Readme's counts hold for that frame only.
+pub fn spd_refuses(spd: bool, given: &[(&str, bool)]) -> whitted::Result<()> {
+    match given.iter().find(|(_, g)| *g) {
+        Some((option, _)) if spd => Err(whitted::Error::msg(format!(
+            "--spd renders the SPD test procedure's frame (512x512 pixels from 513x513 corner rays, spp 0, \
+             {} bounces, one pass) and cannot be combined with {option}",
+            spd::MAX_DEPTH
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// `render`'s options that `--spd` refuses (see [`spd_refuses`]).
+pub fn render_spd_refuses(args: &RenderArgs) -> whitted::Result<()> {
+    let partial = args.partial
+        || args
+            .output
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("partial"));
+    spd_refuses(
+        args.report.spd,
+        &[
+            ("--spp", args.spp.is_some()),
+            ("--passes", args.passes > 1),
+            ("--tiles", args.tiles.is_some()),
+            ("--passes-range", args.passes_range.is_some()),
+            ("--width", args.frame.width.is_some()),
+            ("--height", args.frame.height.is_some()),
+            ("--max-depth", args.max_depth.is_some()),
+            ("a .partial output", partial),
+        ],
+    )
 }
 
 /// The BVH2 builder, as a command-line value.
@@ -145,4 +208,68 @@ pub fn pass_range(s: &str) -> Result<(u32, u32), String> {
         return Err(format!("the pass range {a}..{b} is empty"));
     }
     Ok((a, b))
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::*;
+    use crate::cli::plan::Plan;
+
+    /// `whitted render`'s arguments alone, to parse in tests.
+    #[derive(Parser)]
+    struct Render {
+        #[command(flatten)]
+        args: RenderArgs,
+    }
+
+    /// The plan of `whitted render` with `words` for the built-in scene (or the scene they name), and
+    /// that scene after the plan's overrides.
+    fn plan<'a>(words: impl IntoIterator<Item = &'a str>) -> (whitted::Result<Plan>, Scene) {
+        let render =
+            Render::try_parse_from(std::iter::once("render").chain(words)).expect("arguments clap accepts");
+        let mut scene = load_scene(render.args.scene.as_deref()).expect("the scene");
+        (Plan::new(&render.args, &mut scene), scene)
+    }
+
+    fn error(args: &str) -> String {
+        match plan(args.split_whitespace()).0 {
+            Ok(_) => panic!("{args}: accepted"),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn spd_renders_the_procedures_frame_and_refuses_what_would_change_it() {
+        let (p, _) = plan([
+            "scenes/spd/tetra_default.nff",
+            "--spd",
+            "--kernel",
+            "single",
+            "--seed",
+            "3",
+        ]);
+        let o = p.unwrap().options;
+        let frame = (o.width, o.height, o.spp, o.max_depth, o.spd, o.kernel, o.seed);
+        assert_eq!(frame, (513, 513, 0, 4, true, Kernel::Single, 3));
+        let spd = "--spd renders the SPD test procedure's frame (512x512 pixels from 513x513 corner rays, \
+                   spp 0, 4 bounces, one pass) and cannot be combined with";
+        for (args, option) in [
+            ("--spd --spp 0", "--spp"),
+            ("--spd --passes 4", "--passes"),
+            ("--spd --tiles 0/2 --partial", "--tiles"),
+            ("--spd --passes 4 --passes-range 0..2", "--passes"),
+            ("--spd --width 512", "--width"),
+            ("--spd --height 512", "--height"),
+            ("--spd --max-depth 4", "--max-depth"),
+            ("--spd --partial", "a .partial output"),
+            ("--spd -o frame.partial", "a .partial output"),
+        ] {
+            assert_eq!(error(args), format!("{spd} {option}"), "{args}");
+        }
+        // Without --spd the same options are the plan's.
+        assert_eq!(plan(["--max-depth", "3"]).0.unwrap().options.max_depth, 3);
+        assert_eq!(plan([]).0.unwrap().options.max_depth, DEFAULT_DEPTH);
+    }
 }
