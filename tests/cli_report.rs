@@ -1,7 +1,7 @@
 //! The command line's reports, parsed as a script would read them: `info --json`, `bench --json`,
-//! `render --stats` (text and JSON), and the SPD procedure's counts against the SPD Readme's table.
-//! Expected values come from the scene files (read by hand), the Readme, or counts that follow from the
-//! frame's size.
+//! `render --stats` (text and JSON), the SPD procedure's counts against the SPD Readme's table; and the
+//! camera overrides. Expected values come from the scene files (read by hand), the Readme, or counts
+//! that follow from the frame's size.
 
 mod common;
 
@@ -597,6 +597,49 @@ fn render_stats_counts_every_pass() {
     let n = check_rays(&v, "rays");
     assert_eq!(n[0], 3 * 40 * 30);
     assert_eq!(v["scene"], "(default scene)");
+}
+
+/// The camera overrides give exactly the file's image when they repeat the file's camera, and
+/// another one when they move it; a camera that cannot be (from = at) is the camera's own error.
+#[test]
+fn camera_overrides_render_the_camera_they_describe() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |name: &str, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "render",
+            "scenes/spd/tetra_default.nff",
+            "--width",
+            "48",
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        stdout(whitted(&args));
+        std::fs::read(out).unwrap()
+    };
+    let plain = render("plain.png", &[]);
+    let file = [
+        "--from=1.02285,-3.17715,-2.17451",
+        "--at=-0.004103,-0.004103,0.216539",
+        "--up",
+        "-0.816497,-0.816497,0.816497",
+        "--fov",
+        "45",
+    ];
+    assert_eq!(render("same.png", &file), plain);
+    assert_ne!(render("narrow.png", &["--fov", "30"]), plain);
+    let last = failure(&["render", "--from", "1,2,3", "--at", "1,2,3", "-o", "x.png"]);
+    assert_eq!(
+        last,
+        "whitted: the camera of --from/--at/--up/--fov: \"from\" and \"at\" are the same point (1 2 3)"
+    );
+    let last = failure(&["bench", "scenes/spd/tetra_default.nff", "--up", "0,0,0"]);
+    assert_eq!(
+        last,
+        "whitted: the camera of --from/--at/--up/--fov: \"up\" is the zero vector"
+    );
 }
 
 #[test]

@@ -1,12 +1,14 @@
-//! What the subcommands share: the frame's arguments, the SPD procedure's frame, the scene they load, the threads they render on, and the parsers of their numbers.
+//! What the subcommands share: the frame's arguments, the camera overrides, the SPD procedure's frame,
+//! the scene they load, the threads they render on, and the parsers of their numbers.
 
 use std::path::Path;
 
 use clap::Args;
+use glam::Vec3;
 use whitted::accel::AccelKind;
 use whitted::render::film::Film;
 use whitted::render::{Kernel, Options, spd};
-use whitted::scene::{self, Scene};
+use whitted::scene::{self, Camera, Scene};
 
 use super::render::RenderArgs;
 
@@ -36,6 +38,52 @@ pub struct FrameArgs {
 
 /// The bounce limit when `--max-depth` is not given.
 pub const DEFAULT_DEPTH: u32 = 6;
+
+/// Where the camera is and looks, over the scene file's (`render`, `bench`). Points are `X,Y,Z`: one
+/// word, so that a printed command line needs no quotes.
+#[derive(Args, Clone, Debug, Default, PartialEq)]
+pub struct CameraArgs {
+    /// The eye position, `X,Y,Z` (overrides the file's `from`).
+    #[arg(long, value_name = "X,Y,Z", value_parser = point, allow_hyphen_values = true)]
+    pub from: Option<Vec3>,
+    /// The point looked at, seen at the image centre, `X,Y,Z` (overrides `at`).
+    #[arg(long, value_name = "X,Y,Z", value_parser = point, allow_hyphen_values = true)]
+    pub at: Option<Vec3>,
+    /// The up vector, `X,Y,Z` (overrides `up`).
+    #[arg(long, value_name = "X,Y,Z", value_parser = point, allow_hyphen_values = true)]
+    pub up: Option<Vec3>,
+    /// The vertical field of view in degrees, edge to edge (overrides `angle`).
+    #[arg(long, value_name = "DEG", value_parser = number, allow_hyphen_values = true)]
+    pub fov: Option<f32>,
+}
+
+impl CameraArgs {
+    /// Puts the overrides into `camera` and checks the camera they make, with its own message (the
+    /// file's camera was checked when it was read: without overrides there is nothing new to check).
+    pub fn apply(&self, camera: &mut Camera) -> whitted::Result<()> {
+        if *self == CameraArgs::default() {
+            return Ok(());
+        }
+        camera.from = self.from.unwrap_or(camera.from);
+        camera.at = self.at.unwrap_or(camera.at);
+        camera.up = self.up.unwrap_or(camera.up);
+        camera.fov_y = self.fov.unwrap_or(camera.fov_y);
+        camera
+            .validate()
+            .map_err(|e| whitted::Error::msg(format!("the camera of --from/--at/--up/--fov: {e}")))
+    }
+}
+
+/// A point or vector written `X,Y,Z`, each a finite number.
+pub fn point(s: &str) -> Result<Vec3, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    let [x, y, z] = parts[..] else {
+        return Err(format!(
+            "expected three numbers separated by commas, X,Y,Z (such as 0,1.5,-4), found \"{s}\""
+        ));
+    };
+    Ok(Vec3::new(number(x.trim())?, number(y.trim())?, number(z.trim())?))
+}
 
 /// The options of the SPD test procedure ([`spd::options`]: 513 x 513 corner rays, spp 0, 4 bounces)
 /// in place of `options` when `spd`, keeping what the procedure leaves open (kernel, seed, roughness).
@@ -238,6 +286,53 @@ mod tests {
             Ok(_) => panic!("{args}: accepted"),
             Err(e) => e.to_string(),
         }
+    }
+
+    #[test]
+    fn points_are_three_finite_numbers_separated_by_commas() {
+        assert_eq!(point("1,2,3"), Ok(Vec3::new(1.0, 2.0, 3.0)));
+        assert_eq!(point(" -1.5 , 0,2e3 "), Ok(Vec3::new(-1.5, 0.0, 2000.0)));
+        let three = "expected three numbers separated by commas, X,Y,Z (such as 0,1.5,-4)";
+        assert_eq!(point("1,2"), Err(format!("{three}, found \"1,2\"")));
+        assert_eq!(point("1 2 3"), Err(format!("{three}, found \"1 2 3\"")));
+        assert_eq!(point("1,2,3,4"), Err(format!("{three}, found \"1,2,3,4\"")));
+        assert_eq!(point("1,x,3"), Err("expected a number, found \"x\"".to_string()));
+        assert_eq!(
+            point("1,inf,3"),
+            Err("expected a finite number, found inf".to_string())
+        );
+    }
+
+    #[test]
+    fn camera_overrides_replace_the_files_and_are_checked_by_the_camera() {
+        let (p, scene) = plan("--from -1,2,3.5 --at 0,1,0 --up 0,0,1 --fov 30".split_whitespace());
+        p.unwrap();
+        let c = scene.camera;
+        assert_eq!(
+            (c.from, c.at, c.up, c.fov_y),
+            (Vec3::new(-1.0, 2.0, 3.5), Vec3::Y, Vec3::Z, 30.0)
+        );
+        // What is not overridden stays the file's (scenes/default.p3f: from 0 1.6 5.5, angle 40).
+        let (_, scene) = plan(["--at", "1,1,1"]);
+        assert_eq!(
+            (scene.camera.from, scene.camera.fov_y),
+            (Vec3::new(0.0, 1.6, 5.5), 40.0)
+        );
+        let camera = "the camera of --from/--at/--up/--fov";
+        assert_eq!(
+            error("--from 1,2,3 --at 1,2,3"),
+            format!("{camera}: \"from\" and \"at\" are the same point (1 2 3)")
+        );
+        assert_eq!(
+            error("--up 0,0,0"),
+            format!("{camera}: \"up\" is the zero vector")
+        );
+        assert_eq!(
+            error("--fov 180"),
+            format!("{camera}: expected an angle between 0 and 180 degrees, found 180")
+        );
+        assert!(Render::try_parse_from(["render", "--from", "1,2"]).is_err());
+        assert!(Render::try_parse_from(["render", "--fov", "wide"]).is_err());
     }
 
     #[test]

@@ -12,7 +12,9 @@ use whitted::accel::{Accel, Prims};
 use whitted::render::{Options, Renderer};
 use whitted::scene::Scene;
 
-use super::args::{DEFAULT_DEPTH, FrameArgs, load_scene, resolution, spd_frame, spd_refuses, thread_pool};
+use super::args::{
+    CameraArgs, DEFAULT_DEPTH, FrameArgs, load_scene, resolution, spd_frame, spd_refuses, thread_pool,
+};
 use super::report::Report;
 
 /// Arguments of `whitted bench`.
@@ -36,6 +38,8 @@ pub struct BenchArgs {
     /// counts with the SPD Readme's (refuses --spp, --width, --height and --max-depth).
     #[arg(long)]
     spd: bool,
+    #[command(flatten)]
+    camera: CameraArgs,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
@@ -96,7 +100,8 @@ pub fn run(args: &BenchArgs) -> whitted::Result<()> {
         None => default_scene()?,
     };
     let start = Instant::now();
-    let scene = load_scene(Some(&path))?;
+    let mut scene = load_scene(Some(&path))?;
+    args.camera.apply(&mut scene.camera)?;
     let loaded = start.elapsed();
     let options = options(args, &scene)?;
     let pool = thread_pool(args.frame.threads)?;

@@ -64,6 +64,7 @@ impl Plan {
         if let Some(f) = args.focal {
             scene.camera.focal = f;
         }
+        args.camera.apply(&mut scene.camera)?;
         render_spd_refuses(args)?;
         let (spp, warnings) = spp_per_pass(args, scene);
         let (width, height) = resolution(scene, args.frame.width, args.frame.height);

@@ -12,7 +12,8 @@ use whitted::render::Renderer;
 use whitted::render::progressive::Progressive;
 
 use super::args::{
-    BuildKind, FrameArgs, image, load_scene, non_negative, part_of, pass_range, positive, thread_pool,
+    BuildKind, CameraArgs, FrameArgs, image, load_scene, non_negative, part_of, pass_range, positive,
+    thread_pool,
 };
 use super::plan::{Plan, Target};
 use super::report::{self, Report, ReportArgs};
@@ -82,6 +83,8 @@ pub struct RenderArgs {
     /// No progress bar or summary.
     #[arg(short, long)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub camera: CameraArgs,
     #[command(flatten)]
     pub report: ReportArgs,
 }
