@@ -367,4 +367,44 @@ mod tests {
         assert_eq!(plan(["--max-depth", "3"]).0.unwrap().options.max_depth, 3);
         assert_eq!(plan([]).0.unwrap().options.max_depth, DEFAULT_DEPTH);
     }
+
+    /// The command the viewer prints with a screenshot, run through `render`'s parser and plan, gives
+    /// the view's camera, size, depth and passes.
+    #[cfg(feature = "view")]
+    #[test]
+    fn the_viewers_render_command_gives_the_views_camera() {
+        use whitted::accel::AccelKind;
+        use whitted::view::reproduce::render_command;
+        use whitted::view::state::{Input, Key, Settings, ViewState};
+
+        let path = Path::new("scenes/balls_low.p3f");
+        let scene = load_scene(Some(path)).unwrap();
+        let options = Options {
+            width: 96,
+            height: 64,
+            ..Options::new(&scene)
+        };
+        let mut view = ViewState::new(&scene, options, Settings::new(AccelKind::Bvh4, Kernel::Packet, 6));
+        view.input(Input::Drag { dx: 31.0, dy: 9.0 });
+        view.input(Input::Scroll(-2.0));
+        for key in [Key::LessDepth, Key::DepthOfField] {
+            view.input(Input::Key { key, pressed: true });
+        }
+        let job = view.job();
+        for passes in [1, 5] {
+            let command = render_command(Some(path), &view.file_camera(), &job, passes, false);
+            let words = command.strip_prefix("whitted render ").expect("a render command");
+            let (p, scene) = plan(words.split_whitespace());
+            let p = p.unwrap_or_else(|e| panic!("{command}: {e}"));
+            let o = p.options;
+            let camera = Camera {
+                width: o.width,
+                height: o.height,
+                ..scene.camera
+            };
+            assert_eq!(camera, job.camera, "{command}");
+            assert_eq!((o.max_depth, p.total_passes), (5, passes), "{command}");
+            assert_eq!(o.spp, 1, "one jittered sample per pass: {command}");
+        }
+    }
 }
