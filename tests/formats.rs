@@ -4,7 +4,6 @@
 
 mod common;
 
-use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
 
@@ -147,27 +146,23 @@ fn independent_counts(path: &Path) -> Counts {
 fn info_json(path: &Path) -> Counts {
     let out = whitted(&["info", "--json", path.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let text = String::from_utf8(out.stdout).unwrap();
-    let body = text.trim().strip_prefix('{').unwrap().strip_suffix('}').unwrap();
-    // Only the integer-valued keys matter here; arrays and floats are skipped.
-    let map: HashMap<&str, u64> = body
-        .split(", \"")
-        .filter_map(|kv| {
-            let (k, v) = kv.split_once("\": ")?;
-            Some((k.trim_matches('"'), v.parse().ok()?))
-        })
-        .collect();
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let count = |key: &str| {
+        v[key]
+            .as_u64()
+            .unwrap_or_else(|| panic!("{key} is not a count: {v}"))
+    };
     Counts {
-        spheres: map["spheres"],
-        triangles: map["triangles"],
-        boxes: map["boxes"],
-        planes: map["planes"],
-        cones: map["cones"],
-        point_lights: map["point_lights"],
-        area_lights: map["area_lights"],
-        materials: map["materials"],
-        width: map["width"],
-        height: map["height"],
+        spheres: count("spheres"),
+        triangles: count("triangles"),
+        boxes: count("boxes"),
+        planes: count("planes"),
+        cones: count("cones"),
+        point_lights: count("point_lights"),
+        area_lights: count("area_lights"),
+        materials: count("materials"),
+        width: count("width"),
+        height: count("height"),
     }
 }
 

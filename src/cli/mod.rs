@@ -7,6 +7,7 @@ mod info;
 mod merge;
 mod plan;
 mod render;
+mod report;
 #[cfg(feature = "view")]
 mod view;
 

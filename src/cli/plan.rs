@@ -12,7 +12,7 @@ use whitted::render::progressive::Progressive;
 use whitted::render::{Options, tiles};
 use whitted::scene::Scene;
 
-use super::args::{build_options, check_threads, resolution};
+use super::args::{DEFAULT_DEPTH, build_options, check_threads, render_spd_refuses, resolution, spd_frame};
 use super::render::RenderArgs;
 
 /// A render, checked and ready to run.
@@ -64,18 +64,21 @@ impl Plan {
         if let Some(f) = args.focal {
             scene.camera.focal = f;
         }
+        args.camera.apply(&mut scene.camera)?;
+        render_spd_refuses(args)?;
         let (spp, warnings) = spp_per_pass(args, scene);
         let (width, height) = resolution(scene, args.frame.width, args.frame.height);
         let options = Options {
             width,
             height,
-            max_depth: args.max_depth,
+            max_depth: args.max_depth.unwrap_or(DEFAULT_DEPTH),
             kernel: args.frame.kernel,
             spp,
             seed: args.seed,
             roughness: args.roughness,
             spd: false,
         };
+        let options = spd_frame(args.report.spd, options, scene);
         options.validate()?;
         check_threads(args.frame.threads)?;
         let every = every(args)?;

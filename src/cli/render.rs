@@ -12,9 +12,11 @@ use whitted::render::Renderer;
 use whitted::render::progressive::Progressive;
 
 use super::args::{
-    BuildKind, FrameArgs, load_scene, non_negative, part_of, pass_range, positive, thread_pool,
+    BuildKind, CameraArgs, FrameArgs, image, load_scene, non_negative, part_of, pass_range, positive,
+    thread_pool,
 };
 use super::plan::{Plan, Target};
+use super::report::{self, Report, ReportArgs};
 
 /// Arguments of `whitted render`.
 #[derive(Args)]
@@ -41,9 +43,9 @@ pub struct RenderArgs {
     pub resume: bool,
     #[command(flatten)]
     pub frame: FrameArgs,
-    /// Most bounces after the primary hit.
-    #[arg(long, default_value_t = 6)]
-    pub max_depth: u32,
+    /// Most bounces after the primary hit (default 6).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
     /// The BVH2 builder when `--accel bvh2`: sah or midpoint.
     #[arg(long, default_value = "sah")]
     pub build: BuildKind,
@@ -81,6 +83,10 @@ pub struct RenderArgs {
     /// No progress bar or summary.
     #[arg(short, long)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub report: ReportArgs,
 }
 
 /// Set by Ctrl-C: the render stops at the next tile and keeps the last complete pass.
@@ -134,6 +140,10 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
             "whitted: {}",
             summary(&plan, &acc, [loaded, built, rendered], threads)
         );
+    }
+    if let Some(format) = args.report.stats {
+        let times = [loaded, built, rendered];
+        Report::of_render(args, &plan, &accel, &pool, times, &acc).print(format);
     }
     Ok(())
 }
@@ -200,7 +210,7 @@ fn write(plan: &Plan, acc: &Progressive) -> whitted::Result<()> {
         }
         Target::Image { srgb, snapshots } => (*srgb, snapshots),
     };
-    let film = acc.film();
+    let film = image(&plan.options, acc.film());
     film.write(&plan.output, srgb)?;
     if let Some(dir) = snapshots {
         let stem = plan.output.file_stem().unwrap_or_default().to_string_lossy();
@@ -237,10 +247,9 @@ fn summary(
                 .to_string()
         }
     };
+    let (width, height) = report::image_size(&plan.options);
     format!(
-        "{}x{} in {:.3} s (load {:.3} s, build {:.3} s, accel {:?}, kernel {:?}, {threads} threads{passes}{part}) -> {}",
-        plan.options.width,
-        plan.options.height,
+        "{width}x{height} in {:.3} s (load {:.3} s, build {:.3} s, accel {:?}, kernel {:?}, {threads} threads{passes}{part}) -> {}",
         rendered.as_secs_f64(),
         loaded.as_secs_f64(),
         built.as_secs_f64(),

@@ -61,6 +61,7 @@ pub fn run(args: &ViewArgs) -> whitted::Result<()> {
     };
     let config = Config {
         name,
+        scene: args.scene.clone(),
         options,
         accel: args.frame.accel,
         srgb: args.srgb,
