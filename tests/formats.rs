@@ -7,7 +7,7 @@ mod common;
 use std::io::Read;
 use std::path::Path;
 
-use common::{root, scene_files, shared, whitted};
+use common::{root, scene_files, whitted};
 
 #[derive(Debug, Default, PartialEq)]
 struct Counts {
@@ -178,13 +178,6 @@ fn check_dir(dir: &Path) {
 #[test]
 fn info_counts_for_every_scene_in_scenes() {
     check_dir(&root().join("scenes"));
-}
-
-#[test]
-fn info_counts_for_every_scene_in_shared() {
-    if let Some(shared) = shared() {
-        check_dir(&shared.join("scenes"));
-    }
 }
 
 /// Known figures, not only agreement: the course dragon and the full Stanford dragon.

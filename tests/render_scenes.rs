@@ -79,15 +79,6 @@ fn every_scene_in_scenes_renders_the_same_with_every_accelerator() {
     }
 }
 
-#[test]
-fn every_scene_in_shared_renders_the_same_with_every_accelerator() {
-    if let Some(shared) = common::shared() {
-        for path in common::scene_files(&shared.join("scenes")) {
-            check(&path);
-        }
-    }
-}
-
 /// The same render with 1 and 2 worker threads: tiles are independent, so the bytes are identical.
 #[test]
 fn thread_count_does_not_change_the_image() {

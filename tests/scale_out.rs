@@ -316,12 +316,7 @@ fn scale_out_recipes_run_as_written() {
         "Slurm recipe, rerun"
     );
 
-    let has_parallel = Command::new("parallel")
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !has_parallel {
-        eprintln!("skipped the GNU parallel recipe: `parallel` is not installed");
+    if !common::have("parallel", &[], "apt-get install parallel") {
         return;
     }
     std::fs::remove_dir_all(d.join("parts")).unwrap();
