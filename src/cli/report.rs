@@ -131,7 +131,7 @@ impl Report {
         count as f64 / self.times[2].max(1e-9) / 1e6
     }
 
-    /// The SPD counts, the Readme's row for the scene's file name (if any) and whether they agree.
+    /// With `--spd`: our SPD counts and the Readme's row for the scene's file name, if it has one.
     fn spd(&self) -> Option<(Counts, Option<Counts>)> {
         self.options.spd.then(|| {
             let name = Path::new(&self.scene).file_name().unwrap_or_default();
@@ -158,12 +158,8 @@ impl Report {
             (false, n) => ("render", format!(", {n} passes")),
         };
         out += &format!("time       load {load:.3} s, build {build:.3} s, {what} {render:.3} s{passes}\n");
-        out += &format!(
-            "{:<13}{:>12} {:>10}\n",
-            rays_key(self.per_frame),
-            "count",
-            "Mrays/s"
-        );
+        let rays = if self.per_frame { "rays a frame" } else { "rays" };
+        out += &format!("{rays:<13}{:>12} {:>10}\n", "count", "Mrays/s");
         let r = &self.rays;
         for (kind, count) in by_kind(r) {
             out += &format!("  {kind:<11}{count:>12} {:>10.2}\n", self.mrays(count));
@@ -251,7 +247,7 @@ pub fn kernel_name(kernel: Kernel) -> &'static str {
     }
 }
 
-/// The name of the rays' entry: a bench's are one frame's.
+/// The JSON key of the rays: a bench's are one frame's.
 fn rays_key(per_frame: bool) -> &'static str {
     if per_frame { "rays_per_frame" } else { "rays" }
 }
@@ -329,4 +325,124 @@ fn spd_json(ours: &Counts, readme: Option<&Counts>) -> Value {
         "ratio": ratios,
         "within_10_percent": readme.map(|want| ours.within(want, SPD_TOLERANCE)),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A report of made-up figures whose rates are exact: 0.5 s of render.
+    fn report(spd: bool) -> Report {
+        let options = Options {
+            width: 513,
+            height: 513,
+            max_depth: 4,
+            kernel: Kernel::Packet,
+            spp: 0,
+            seed: 0,
+            roughness: 0.0,
+            spd,
+        };
+        let rays = RayCounts {
+            primary: 1000,
+            primary_hits: 500,
+            shadow: 2000,
+            reflected: 300,
+            refracted: 200,
+        };
+        Report {
+            scene: "scenes/spd/tetra_x.nff".into(),
+            options,
+            accel: "bvh4",
+            simd: "portable",
+            threads: 2,
+            passes: 1,
+            times: [0.25, 0.125, 0.5],
+            rays,
+            per_frame: false,
+        }
+    }
+
+    #[test]
+    fn json_has_the_figures_and_the_rates_over_the_render_time() {
+        let want = json!({
+            "version": VERSION, "scene": "scenes/spd/tetra_x.nff", "width": 513, "height": 513,
+            "spp": 0, "max_depth": 4, "accel": "bvh4", "simd": "portable", "kernel": "packet",
+            "threads": 2, "passes": 1, "load_s": 0.25, "build_s": 0.125, "render_s": 0.5,
+            "rays": {"primary": 1000, "primary_hits": 500, "shadow": 2000, "reflected": 300,
+                     "refracted": 200, "total": 3500},
+            "mrays_per_s": 0.007,
+            "mrays_per_s_by_kind": {"primary": 0.002, "shadow": 0.004, "reflected": 0.0006,
+                                    "refracted": 0.0004, "total": 0.007},
+        });
+        let got = Value::Object(report(false).json());
+        assert_eq!(got, want);
+        // In the order written, as the README lists them.
+        let json = report(false).json();
+        let keys: Vec<&str> = json.keys().map(String::as_str).collect();
+        assert_eq!(keys[..3], ["version", "scene", "width"]);
+    }
+
+    #[test]
+    fn an_spd_report_has_the_image_size_and_the_readmes_row_with_ratios() {
+        let v = Value::Object(report(true).json());
+        assert_eq!((&v["width"], &v["height"]), (&json!(512), &json!(512)));
+        let want = json!({
+            "counts": {"eye_hits": 500, "reflected": 300, "refracted": 200, "shadow": 2000},
+            "readme": {"eye_hits": 49_788, "reflected": 0, "refracted": 0, "shadow": 46_112},
+            "ratio": {"eye_hits": 500.0 / 49_788.0, "reflected": null, "refracted": null,
+                      "shadow": 2000.0 / 46_112.0},
+            "within_10_percent": false,
+        });
+        assert_eq!(v["spd"], want);
+        let jacks = Report {
+            scene: "jacks_1.nff".into(),
+            ..report(true)
+        };
+        let v = Value::Object(jacks.json());
+        assert_eq!(
+            (
+                &v["spd"]["readme"],
+                &v["spd"]["ratio"],
+                &v["spd"]["within_10_percent"]
+            ),
+            (&Value::Null, &Value::Null, &Value::Null)
+        );
+    }
+
+    #[test]
+    fn text_is_a_table_of_the_same_figures() {
+        let want = format!(
+            "whitted {VERSION}: scenes/spd/tetra_x.nff, 512x512, spp 0, depth 4, bvh4 (portable), packet kernel, 2 threads
+time       load 0.250 s, build 0.125 s, render 0.500 s
+rays                count    Mrays/s
+  primary            1000       0.00
+    hits              500
+  shadow             2000       0.00
+  reflected           300       0.00
+  refracted           200       0.00
+  total              3500       0.01
+SPD counts           ours     Readme   ratio
+  eye hits            500      49788   0.010
+  reflected           300          0       -
+  refracted           200          0       -
+  shadow             2000      46112   0.043
+  within the Readme's 10%: no (its counts hold for the default size)
+"
+        );
+        assert_eq!(report(true).text(), want);
+        let bench = Report {
+            per_frame: true,
+            passes: 1,
+            ..report(false)
+        };
+        let text = bench.text();
+        assert!(!text.contains("render 0.500 s"), "{text}");
+        assert!(text.contains("frame (median) 0.500 s\nrays a frame "), "{text}");
+        let passes = Report {
+            passes: 3,
+            ..report(false)
+        };
+        assert!(passes.text().contains("render 0.500 s, 3 passes\n"));
+    }
 }
