@@ -121,7 +121,7 @@ fn run(name: &str) -> Result<(), String> {
     let Accel::Bvh4(bvh) = &accel else {
         return Err("the dragon did not get a BVH4".into());
     };
-    let w = whitted::workload::generate(&scene, &accel, 1);
+    let w = whitted::kit::workload::generate(&scene, &accel, 1);
     if let Some(base) = name.strip_suffix("-bvh8") {
         // The BVH8 on the best slab test this CPU (or valgrind's model of it) has.
         let accel8 = Accel::build(prims, AccelKind::Bvh8);
@@ -157,7 +157,7 @@ fn run(name: &str) -> Result<(), String> {
 /// `(rays, hits)`, or `None` for a name that is not one.
 fn single_rays(
     name: &str,
-    w: &whitted::workload::Workload,
+    w: &whitted::kit::workload::Workload,
     closest: impl Fn(&Ray, &mut Hit) -> bool,
     any: impl Fn(&Ray, &mut Hit) -> bool,
 ) -> Option<(usize, usize)> {

@@ -52,11 +52,12 @@ pub mod accel;
 pub mod digest;
 pub mod error;
 pub mod geometry;
+#[cfg(feature = "kit")]
+pub mod kit;
 pub mod parts;
 pub mod render;
 pub mod scene;
 #[cfg(feature = "view")]
 pub mod view;
-pub mod workload;
 
 pub use error::{Error, Result};

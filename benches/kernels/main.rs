@@ -36,7 +36,7 @@ use whitted::accel::policy::{AnyHit, Closest};
 use whitted::accel::wide::{Simd, WideBvh};
 use whitted::accel::{Accel, AccelKind, BuildOptions, Hit, Prims};
 use whitted::geometry::ray::Ray;
-use whitted::workload::{self, Workload};
+use whitted::kit::workload::{self, Workload};
 
 /// Rays of each set that brute force traces (it tests all 871k triangles per ray).
 const BRUTE_SAMPLE: usize = 64;

@@ -416,103 +416,48 @@ mod tests {
     use std::path::Path;
 
     use super::*;
-    use crate::accel::brute::Brute;
-    use crate::accel::policy::{AnyHit, Closest};
-    use crate::geometry::ray::testing::TestRng;
-    use crate::render::camera::RayCamera;
+    use crate::accel::policy::AnyHit;
+    use crate::accel::{Accel, AccelKind};
+    use crate::kit::oracle::{self, Agreement, Tally};
+    use crate::kit::rays::{self, Case, TestRng};
     use crate::scene::{Camera, Material, Scene};
 
-    /// Counts of what the comparisons exercised.
-    #[derive(Default, Debug)]
-    struct Tally {
-        rays: usize,
-        hits: usize,
-    }
-
-    /// Traces `ray` through the grid and brute force, closest and any-hit, and asserts the same answers:
-    /// the whole hit record for closest hits (ties included), and any-hit just above and below the
-    /// closest `t`. Returns brute force's closest hit.
-    fn check(grid: &Grid, brute: &Brute, ray: &Ray, t_min: f32, t_max: f32, tally: &mut Tally) -> Hit {
-        let mut want = Hit::miss(t_max);
-        brute.traverse::<Closest>(ray, t_min, &mut want);
-        let mut got = Hit::miss(t_max);
-        let found = grid.traverse::<Closest>(ray, t_min, &mut got);
-        assert_eq!(
-            found,
-            want.is_hit(),
-            "{ray:?} t_min {t_min}: {got:?} vs brute {want:?}"
-        );
-        assert_eq!(got, want, "{ray:?} t_min {t_min}");
-        let limits = if want.is_hit() {
-            [want.t * 1.001 + 1e-30, want.t * 0.999, t_max]
-        } else {
-            [t_max, 1.0, 1e30]
-        };
-        for limit in limits {
-            let expect = want.is_hit() && want.t < limit;
-            let mut any = Hit::miss(limit.min(t_max));
-            assert_eq!(
-                grid.traverse::<AnyHit>(ray, t_min, &mut any),
-                expect,
-                "any-hit {ray:?} t_min {t_min} t_max {limit}: closest {want:?}"
-            );
-            if expect {
-                assert!(any.t > t_min && any.t < limit, "{any:?}");
-            }
-        }
-        tally.rays += 1;
-        tally.hits += want.is_hit() as usize;
-        want
-    }
-
-    /// Runs `count` rays of each kind through `scene`: random origins in and around its box with random
-    /// and axis-aligned directions, rays along the grid's cell boundary planes, camera rays, and rays
-    /// leaving the surfaces hit (`t_min = 1e-4`).
+    /// Compares the grid with brute force, bit for bit, on `2 * count` of the kit's test rays
+    /// (random, camera, grazing, from surfaces) and `count / 4` rays along the grid's cell boundary
+    /// planes, with single rays and packets ([`oracle::check`]); and checks that any hit's record lies
+    /// within the interval asked.
     fn compare(scene: &Scene, count: usize, seed: u64) -> Tally {
         let prims = Prims::new(scene);
-        let grid = Grid::build(prims);
-        let brute = Brute::new(prims);
-        let mut rng = TestRng::new(seed);
-        let mut tally = Tally::default();
-        let b = scene.bounds();
-        let (lo, hi) = if b.is_empty() {
-            (Vec3::splat(-5.0), Vec3::splat(5.0))
-        } else {
-            let e = b.extent().max(Vec3::splat(1e-3 * b.extent().max_element()));
-            (b.min - 0.5 * e, b.max + 0.5 * e)
+        let brute = Accel::build(prims, AccelKind::None);
+        let accel = Accel::build(prims, AccelKind::Grid);
+        let Accel::Grid(grid) = &accel else {
+            panic!("a grid was asked for")
         };
-        let origin = |rng: &mut TestRng| lo + (hi - lo) * rng.vec3(0.0, 1.0);
-        let axes = [Vec3::X, Vec3::Y, Vec3::Z, Vec3::NEG_X, Vec3::NEG_Y, Vec3::NEG_Z];
-        let mut surface = Vec::new();
-        for i in 0..count {
-            // Random direction; every third one with a zero component, every fifth along an axis.
-            let mut dir = rng.direction();
-            if i % 3 == 0 {
-                dir[i % 7 % 3] = 0.0;
-            }
-            if i % 5 == 0 {
-                dir = axes[i % 6];
-            }
-            let o = origin(&mut rng);
-            // Every fourth at a primitive, so that small ones in large scenes get hit too.
-            if i % 4 == 1 && prims.bounded() > 0 {
-                let b = prims.bounds((rng.unit_f32() * prims.bounded() as f32) as u32);
-                let aim = (b.min + b.extent() * rng.vec3(0.0, 1.0) - o).normalize();
-                if aim.is_finite() {
-                    dir = aim;
-                }
-            }
-            let ray = Ray::new(o, dir);
-            let hit = check(&grid, &brute, &ray, 0.0, f32::INFINITY, &mut tally);
-            if hit.is_hit() {
-                surface.push(ray.at(hit.t));
-            }
+        let mut cases = rays::cases(scene, &brute, 2 * count, seed);
+        cases.extend(boundary_rays(grid, &prims, count / 4, seed));
+        let want = oracle::answers(&brute, &cases);
+        let tally = oracle::check("grid", &accel, Agreement::Exact, &cases, &want);
+        for (c, want) in cases.iter().zip(&want).filter(|(_, w)| w.is_hit()) {
+            let limit = (want.t * 1.001).min(c.t_max);
+            let mut any = Hit::miss(limit);
+            assert!(grid.traverse::<AnyHit>(&c.ray, c.t_min, &mut any), "{c:?}");
+            assert!(any.t > c.t_min && any.t < limit, "{c:?}: {any:?}");
         }
-        // Along cell boundary planes: an origin coordinate on a plane of the lattice and no motion across it.
+        tally
+    }
+
+    /// Rays along cell boundary planes: an origin coordinate on a plane of the lattice and no motion
+    /// across it (every other one on two planes at once), where the walk's steps divide by zero.
+    fn boundary_rays(grid: &Grid, prims: &Prims, n: usize, seed: u64) -> Vec<Case> {
+        if grid.refs.is_empty() {
+            return Vec::new();
+        }
+        let mut rng = TestRng::new(seed ^ 0x9e37_79b9);
+        let (lo, hi) = rays::origin_box(prims);
         let l = grid.lattice;
-        if !grid.refs.is_empty() {
-            for i in 0..count / 4 {
-                let mut o = origin(&mut rng);
+        (0..n)
+            .map(|i| {
+                let mut o = lo + (hi - lo) * rng.vec3(0.0, 1.0);
                 let a = i % 3;
                 o[a] = l.plane(a, (rng.unit_f32() * (l.res[a] + 1) as f32) as i32);
                 let mut dir = rng.direction();
@@ -522,32 +467,9 @@ mod tests {
                     o[b] = l.plane(b, (rng.unit_f32() * (l.res[b] + 1) as f32) as i32);
                     dir[b] = 0.0;
                 }
-                check(&grid, &brute, &Ray::new(o, dir), 0.0, f32::INFINITY, &mut tally);
-            }
-        }
-        // Camera rays on a regular lattice of the image.
-        let side = (count as f32).sqrt().ceil() as u32;
-        let camera = RayCamera::new(&scene.camera, side, side);
-        for y in 0..side {
-            for x in 0..side {
-                let ray = camera.ray(x as f32 + 0.5, y as f32 + 0.5);
-                let hit = check(&grid, &brute, &ray, 0.0, f32::INFINITY, &mut tally);
-                if hit.is_hit() && (x + y) % 2 == 0 {
-                    surface.push(ray.at(hit.t));
-                }
-            }
-        }
-        // From the surfaces hit, in random directions (half with a finite segment, as shadow rays have).
-        for (i, p) in surface.into_iter().enumerate() {
-            let ray = Ray::new(p, rng.direction());
-            let t_max = if i % 2 == 0 {
-                f32::INFINITY
-            } else {
-                rng.range(0.0, (hi - lo).length())
-            };
-            check(&grid, &brute, &ray, 1e-4, t_max, &mut tally);
-        }
-        tally
+                Case::ray(Ray::new(o, dir), 0.0)
+            })
+            .collect()
     }
 
     /// A camera looking at the origin from `(3, -30, 20)`.

@@ -109,7 +109,7 @@ pub fn bounds(base: Vec3, base_radius: f32, apex: Vec3, apex_radius: f32) -> Aab
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::ray::testing::TestRng;
+    use crate::kit::rays::TestRng;
 
     const INF: f32 = f32::INFINITY;
 

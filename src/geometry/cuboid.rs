@@ -74,7 +74,7 @@ pub fn normal(min: Vec3, max: Vec3, p: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::ray::testing::TestRng;
+    use crate::kit::rays::TestRng;
     use glam::DVec3;
 
     const MIN: Vec3 = Vec3::new(-1.0, -2.0, -3.0);

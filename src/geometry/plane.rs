@@ -21,7 +21,7 @@ pub fn intersect(normal: Vec3, offset: f32, ray: &Ray, t_min: f32, t_max: f32) -
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::ray::testing::TestRng;
+    use crate::kit::rays::TestRng;
 
     #[test]
     fn closed_form() {

@@ -55,48 +55,10 @@ pub const SLAB_ROBUST: f32 = 1.000_000_4;
 /// hierarchy's answer identical to brute force in such ties, at no measurable cost.
 pub const CULL_MARGIN: f32 = 1.0 + 1.0 / 4096.0;
 
-/// Seeded random numbers shared by the geometry tests, so that failures reproduce.
+/// The test kit's generator under the path `accel/wide/packet.rs`'s tests import it from.
 #[cfg(test)]
 pub(crate) mod testing {
-    use glam::Vec3;
-    use rand_xoshiro::Xoshiro256PlusPlus;
-    use rand_xoshiro::rand_core::{Rng, SeedableRng};
-
-    /// A deterministic generator of test floats and vectors.
-    pub(crate) struct TestRng(Xoshiro256PlusPlus);
-
-    impl TestRng {
-        /// A generator seeded with `seed`.
-        pub(crate) fn new(seed: u64) -> Self {
-            TestRng(Xoshiro256PlusPlus::seed_from_u64(seed))
-        }
-
-        /// Uniform in [0, 1): the top 24 bits are exactly representable in an f32.
-        pub(crate) fn unit_f32(&mut self) -> f32 {
-            (self.0.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-        }
-
-        /// Uniform in [lo, hi).
-        pub(crate) fn range(&mut self, lo: f32, hi: f32) -> f32 {
-            lo + (hi - lo) * self.unit_f32()
-        }
-
-        /// Uniform in the box [lo, hi)^3.
-        pub(crate) fn vec3(&mut self, lo: f32, hi: f32) -> Vec3 {
-            Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
-        }
-
-        /// Uniform on the unit sphere, by rejection from the cube.
-        pub(crate) fn direction(&mut self) -> Vec3 {
-            loop {
-                let v = self.vec3(-1.0, 1.0);
-                let l2 = v.length_squared();
-                if l2 > 1e-4 && l2 <= 1.0 {
-                    return v / l2.sqrt();
-                }
-            }
-        }
-    }
+    pub(crate) use crate::kit::rays::TestRng;
 }
 
 #[cfg(test)]

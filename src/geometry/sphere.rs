@@ -73,7 +73,7 @@ pub fn bounds(center: Vec3, radius: f32) -> Aabb {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::ray::testing::TestRng;
+    use crate::kit::rays::TestRng;
 
     const C: Vec3 = Vec3::new(1.0, 2.0, 3.0);
 

@@ -71,7 +71,7 @@ pub fn bounds(v0: Vec3, e1: Vec3, e2: Vec3) -> Aabb {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::ray::testing::TestRng;
+    use crate::kit::rays::TestRng;
     use glam::DVec3;
 
     const V0: Vec3 = Vec3::new(1.0, 1.0, 0.0);

@@ -1,7 +1,7 @@
 //! The benchmark ray sets of `shared/bench/dragon-workload.md`, generated from a scene: primary rays
 //! through every pixel centre, a shadow ray from each primary hit to the first point light (any-hit), and
-//! one cosine-weighted diffuse bounce from each hit (closest-hit, incoherent). The benches, `whitted
-//! bench` and the profiles all trace these same rays.
+//! one cosine-weighted diffuse bounce from each hit (closest-hit, incoherent). The kernels bench and the
+//! profiles trace these same rays, so their figures compare.
 
 use glam::Vec3;
 use rand_xoshiro::Xoshiro256PlusPlus;
