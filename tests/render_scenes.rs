@@ -1,75 +1,95 @@
-//! Every scene renders, deterministically, and every accelerator gives the same image.
+//! Every scene renders, deterministically, and every accelerator and kernel (the kit's contestants,
+//! each built once per scene) gives the same image, which is brute force's.
 
 mod common;
 
 use std::path::Path;
+use std::time::Instant;
 
 use whitted::accel::{Accel, AccelKind, Prims};
+use whitted::kit::contestants::{self, Contestant};
 use whitted::render::{Kernel, Options, Renderer};
 use whitted::scene::{self, Scene};
 
-fn render(scene: &Scene, kind: AccelKind, size: u32) -> Vec<u8> {
-    render_with(scene, kind, size, Kernel::Single)
-}
-
-fn render_with(scene: &Scene, kind: AccelKind, size: u32, kernel: Kernel) -> Vec<u8> {
-    let accel = Accel::build(Prims::new(scene), kind);
+fn render(scene: &Scene, accel: &Accel, size: u32, kernel: Kernel) -> Vec<u8> {
     let mut options = Options::new(scene);
     (options.width, options.height) = (size, size);
     options.kernel = kernel;
-    Renderer::new(scene, &accel, options).render().to_rgb8(false)
+    Renderer::new(scene, accel, options).render().to_rgb8(false)
 }
 
-/// Scenes whose brute-force render at 128x128 takes minutes: compared with brute force at 24x24.
-fn is_big(scene: &Scene) -> bool {
-    scene.bounded_count() > 10_000
+/// The side of the brute-force render a scene's image is compared with: 128, but 24 for scenes of more
+/// than 10,000 primitives (brute force at 128x128 would take minutes) and 8 for more than 500,000 (the
+/// full dragon, where 24x24 takes 20 s: the exhaustive tier renders that,
+/// `full_dragon_matches_brute_force_at_24x24`).
+fn brute_size(scene: &Scene) -> u32 {
+    match scene.bounded_count() {
+        0..=10_000 => 128,
+        10_001..=500_000 => 24,
+        _ => 8,
+    }
 }
 
 fn check(path: &Path) {
+    let start = Instant::now();
     let scene = scene::load(path).unwrap_or_else(|e| panic!("{e}"));
-    let a = render(&scene, AccelKind::Bvh4, 128);
-    let b = render(&scene, AccelKind::Bvh4, 128);
-    assert!(a == b, "{}: two renders differ", path.display());
+    let prims = Prims::new(&scene);
+    let list: Vec<Contestant> = contestants::all(prims);
+    let built = start.elapsed();
+    // The reference: the first wide BVH's single rays (the fastest to render), itself rendered twice
+    // (here and in the loop), and compared with brute force below.
+    let first = list
+        .iter()
+        .find(|c| c.has_packet_kernel())
+        .expect("a wide BVH is listed");
+    let a = render(&scene, &first.accel, 128, Kernel::Single);
     // 128 is a multiple of the 4x2 packets; 125 leaves partial packets at the tiles' edges.
-    for size in [128, 125] {
-        assert!(
-            render_with(&scene, AccelKind::Bvh4, size, Kernel::Packet)
-                == render(&scene, AccelKind::Bvh4, size),
-            "{}: packet and single-ray kernels differ at {size}x{size}",
-            path.display()
-        );
+    let a125 = render(&scene, &first.accel, 125, Kernel::Single);
+    for c in &list {
+        for kernel in [Kernel::Single, Kernel::Packet] {
+            assert!(
+                render(&scene, &c.accel, 128, kernel) == a,
+                "{}: {}, {kernel:?}, differs from {}'s single rays",
+                path.display(),
+                c.name,
+                first.name
+            );
+        }
+        if c.has_packet_kernel() {
+            assert!(
+                render(&scene, &c.accel, 125, Kernel::Packet) == a125,
+                "{}: {}'s packets differ from {}'s single rays at 125x125",
+                path.display(),
+                c.name,
+                first.name
+            );
+        }
     }
-    assert_eq!(
-        render(&scene, AccelKind::Bvh2, 128),
-        a,
-        "{}: bvh2 differs from bvh4",
-        path.display()
-    );
-    assert_eq!(
-        render(&scene, AccelKind::Grid, 128),
-        a,
-        "{}: the grid differs from bvh4",
-        path.display()
-    );
-    assert_eq!(
-        render(&scene, AccelKind::Bvh8, 128),
-        a,
-        "{}: bvh8 differs from bvh4",
-        path.display()
-    );
+    let size = brute_size(&scene);
+    let brute = Accel::build(prims, AccelKind::None);
     assert!(
-        render_with(&scene, AccelKind::Bvh8, 128, Kernel::Packet) == a,
-        "{}: bvh8's packets differ from bvh4",
-        path.display()
+        render(&scene, &brute, size, Kernel::Single) == render(&scene, &first.accel, size, Kernel::Single),
+        "{}: {} differs from brute force at {size}x{size}",
+        path.display(),
+        first.name
     );
-    let size = if is_big(&scene) { 24 } else { 128 };
-    let reference = render(&scene, AccelKind::None, size);
-    assert_eq!(
-        render(&scene, AccelKind::Bvh4, size),
-        reference,
-        "{}: bvh4 differs from brute force",
-        path.display()
+    eprintln!(
+        "{}: {} contestants built in {:.2} s, checked in {:.2} s",
+        path.display(),
+        list.len(),
+        built.as_secs_f64(),
+        (start.elapsed() - built).as_secs_f64()
     );
+}
+
+#[test]
+#[ignore = "exhaustive tier: brute force over 871k triangles at 24x24, about 25 s on 2 cores"]
+fn full_dragon_matches_brute_force_at_24x24() {
+    let scene = scene::load(&common::root().join("scenes/dragon_full.p3f")).unwrap();
+    let prims = Prims::new(&scene);
+    let brute = Accel::build(prims, AccelKind::None);
+    let best = Accel::build(prims, AccelKind::best());
+    assert!(render(&scene, &brute, 24, Kernel::Single) == render(&scene, &best, 24, Kernel::Single));
 }
 
 #[test]
@@ -83,6 +103,7 @@ fn every_scene_in_scenes_renders_the_same_with_every_accelerator() {
 #[test]
 fn thread_count_does_not_change_the_image() {
     let scene = scene::load(&common::root().join("scenes/balls_medium.p3f")).unwrap();
+    let accel = Accel::build(Prims::new(&scene), AccelKind::Bvh4);
     let images: Vec<Vec<u8>> = [1, 2]
         .iter()
         .map(|&n| {
@@ -90,7 +111,7 @@ fn thread_count_does_not_change_the_image() {
                 .num_threads(n)
                 .build()
                 .unwrap()
-                .install(|| render(&scene, AccelKind::Bvh4, 96))
+                .install(|| render(&scene, &accel, 96, Kernel::Single))
         })
         .collect();
     assert!(images[0] == images[1]);
@@ -159,12 +180,14 @@ fn packets_match_single_rays_with_many_light_samples_and_deep_bounces() {
         Vec3::new(0.0, 0.0, -5.0),
         matte,
     );
-    for size in [64, 61] {
-        assert!(
-            render_with(&s, AccelKind::Bvh4, size, Kernel::Packet)
-                == render_with(&s, AccelKind::Bvh4, size, Kernel::Single),
-            "packet and single-ray kernels differ at {size}x{size}"
-        );
+    for c in contestants::all(Prims::new(&s)) {
+        for size in [64, 61] {
+            assert!(
+                render(&s, &c.accel, size, Kernel::Packet) == render(&s, &c.accel, size, Kernel::Single),
+                "{}: packet and single-ray kernels differ at {size}x{size}",
+                c.name
+            );
+        }
     }
 }
 

@@ -6,11 +6,84 @@ use super::oracle::Agreement;
 use crate::accel::bvh2::Builder;
 use crate::accel::{Accel, AccelKind, BuildOptions, Prims, Simd};
 
+/// A structure and the options it is built with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Build {
+    /// Its name: `grid`, `bvh2 midpoint`, `bvh2 sah`, `bvh4`, `bvh4 4 bins`, `bvh8`.
+    pub name: &'static str,
+    /// The structure.
+    pub kind: AccelKind,
+    /// Its build options (the BVH2's split rule, the SAH's bins).
+    pub options: BuildOptions,
+    /// True where the structure is listed once per instruction set its kernels have (the wide BVHs
+    /// at their default build); the other builds of a wide BVH run on the CPU's best set only.
+    pub each_simd: bool,
+}
+
+/// The SAH's default: 12 bins per axis.
+const SAH: BuildOptions = BuildOptions {
+    builder: Builder::Sah { bins: 12 },
+    bins: 12,
+};
+
+/// Every build: what the build bench times, and what [`all`] builds.
+pub const BUILDS: [Build; 6] = [
+    Build {
+        name: "grid",
+        kind: AccelKind::Grid,
+        options: SAH,
+        each_simd: false,
+    },
+    Build {
+        name: "bvh2 midpoint",
+        kind: AccelKind::Bvh2,
+        options: BuildOptions {
+            builder: Builder::Midpoint,
+            bins: 12,
+        },
+        each_simd: false,
+    },
+    Build {
+        name: "bvh2 sah",
+        kind: AccelKind::Bvh2,
+        options: SAH,
+        each_simd: false,
+    },
+    Build {
+        name: "bvh4",
+        kind: AccelKind::Bvh4,
+        options: SAH,
+        each_simd: true,
+    },
+    Build {
+        name: "bvh4 4 bins",
+        kind: AccelKind::Bvh4,
+        options: BuildOptions {
+            builder: Builder::Sah { bins: 4 },
+            bins: 4,
+        },
+        each_simd: false,
+    },
+    Build {
+        name: "bvh8",
+        kind: AccelKind::Bvh8,
+        options: SAH,
+        each_simd: true,
+    },
+];
+
+impl Build {
+    /// Builds it over `prims` (on the current rayon pool).
+    pub fn build<'a>(&self, prims: Prims<'a>) -> Accel<'a> {
+        Accel::build_with(prims, self.kind, self.options)
+    }
+}
+
 /// A built accelerator and its name.
 #[derive(Clone, Debug)]
 pub struct Contestant<'a> {
-    /// The structure, its build where it has a choice, and its instruction set where it has one:
-    /// `grid`, `bvh2 midpoint`, `bvh2 sah`, `bvh4 avx2`, `bvh4 portable`, `bvh4 4 bins`, `bvh8 avx2`,
+    /// The build's name, then the instruction set for those listed once per set: `grid`,
+    /// `bvh2 midpoint`, `bvh2 sah`, `bvh4 avx2`, `bvh4 portable`, `bvh4 4 bins`, `bvh8 avx2`,
     /// `bvh8 portable`.
     pub name: String,
     /// The structure.
@@ -46,66 +119,32 @@ impl Contestant<'_> {
 /// The instruction sets the wide BVHs' kernels have, in the order they are listed.
 const SIMD: [(Simd, &str); 2] = [(Simd::Avx2, "avx2"), (Simd::Portable, "portable")];
 
-/// Every accelerator and kernel over `prims`, each built once (on the current rayon pool): the grid,
-/// the BVH2 by midpoint split and by binned SAH, the BVH4 and the BVH8 on each instruction set this CPU
-/// has (one build each, copied for the other set), and the BVH4 from 4 SAH bins instead of 12. On a CPU
-/// without AVX2 it says, on stderr, that only the portable kernels are there.
+/// Every build of [`BUILDS`] over `prims`, each built once (on the current rayon pool), the wide BVHs at
+/// their default build once per instruction set this CPU has (copies of one build). On a CPU without
+/// AVX2 it says, on stderr, that only the portable kernels are there.
 pub fn all(prims: Prims<'_>) -> Vec<Contestant<'_>> {
-    let with = |kind, options| Accel::build_with(prims, kind, options);
-    let mut out = vec![
-        Contestant {
-            name: "grid".into(),
-            accel: Accel::build(prims, AccelKind::Grid),
-        },
-        Contestant {
-            name: "bvh2 midpoint".into(),
-            accel: with(
-                AccelKind::Bvh2,
-                BuildOptions {
-                    builder: Builder::Midpoint,
-                    ..BuildOptions::default()
-                },
-            ),
-        },
-        Contestant {
-            name: "bvh2 sah".into(),
-            accel: Accel::build(prims, AccelKind::Bvh2),
-        },
-    ];
     if !Simd::Avx2.available() {
         eprintln!("this CPU has no AVX2: the wide BVHs run their portable kernels only");
     }
-    for (kind, width) in [(AccelKind::Bvh4, "bvh4"), (AccelKind::Bvh8, "bvh8")] {
-        let built = Accel::build(prims, kind);
-        let variants: Vec<Contestant> = SIMD
-            .iter()
-            .filter_map(|&(simd, set)| {
-                let mut accel = built.clone();
-                accel.set_simd(simd).then(|| Contestant {
-                    name: format!("{width} {set}"),
-                    accel,
-                })
-            })
-            .collect();
-        if variants.is_empty() {
-            // Beyond the wide BVHs' primitive limit: the BVH2 the build falls back to.
+    let mut out = Vec::new();
+    for b in &BUILDS {
+        let accel = b.build(prims);
+        // A scene beyond the wide BVHs' primitive limit gets a BVH2, which has no instruction set.
+        if !b.each_simd || accel.simd().is_none() {
             out.push(Contestant {
-                name: format!("{width} (bvh2 fallback)"),
-                accel: built,
+                name: b.name.into(),
+                accel,
             });
+            continue;
         }
-        out.extend(variants);
-        if kind == AccelKind::Bvh4 {
-            out.push(Contestant {
-                name: "bvh4 4 bins".into(),
-                accel: with(
-                    kind,
-                    BuildOptions {
-                        bins: 4,
-                        ..BuildOptions::default()
-                    },
-                ),
-            });
+        for (simd, set) in SIMD {
+            let mut copy = accel.clone();
+            if copy.set_simd(simd) {
+                out.push(Contestant {
+                    name: format!("{} {set}", b.name),
+                    accel: copy,
+                });
+            }
         }
     }
     out

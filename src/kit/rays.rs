@@ -78,8 +78,8 @@ impl Case {
 /// How many kinds of ray [`cases`] makes, in turn.
 const KINDS: usize = 4;
 
-/// `n` test rays over `scene`, of four kinds in turn (so that any prefix, and any evenly spaced sample,
-/// mixes them):
+/// `n` test rays over `scene`, of four kinds in turn (so that any prefix, and any sample at an odd
+/// stride, mixes them):
 ///
 /// - random: origins uniform in [`origin_box`], uniform directions; every third of them with one
 ///   component zero and every fifth along an axis (the directions whose slab tests divide by zero);
@@ -88,8 +88,9 @@ const KINDS: usize = 4;
 ///   and shared edges, where rounding decides), or at a random point of another primitive's box (so that
 ///   small primitives in big scenes get hit too);
 /// - leaving a surface, as secondary rays do: from the hit point of a random ray, in a random direction;
-///   `t_min` 0 for every other one (the surface itself lies at `t` = 0) and 1e-5 of the scene's diagonal
-///   for the rest; half of them segments ending at a random `t` within the diagonal, as shadow rays are.
+///   `t_min` 0 for every other one (the surface itself lies at `t` = 0) and 1e-5 of [`origin_box`]'s
+///   diagonal for the rest; half of them segments ending at a random `t` within that diagonal, as
+///   shadow rays are.
 ///
 /// `finder` only finds the points to start from: any structure will do, and nothing here checks it.
 pub fn cases(scene: &Scene, finder: &Accel, n: usize, seed: u64) -> Vec<Case> {
