@@ -166,7 +166,37 @@ fn merge_refuses_bad_parts_by_name() {
     let bytes = std::fs::read(&p[1]).unwrap();
     let cut = path(d, "cut.partial");
     std::fs::write(&cut, &bytes[..bytes.len() - 100]).unwrap();
-    assert_merge_fails(d, &[&p[0], &cut, &p[2]], "cut.partial", "truncated");
+    // 64x48 is 4 x 3 tiles of 16 x 16; part 1/3 holds 4 of them, 1024 pixels: 88 bytes of header, 4
+    // tile indices of 4 bytes, 28 bytes a pixel and an 8-byte checksum make 28,784 bytes.
+    assert_eq!(bytes.len(), 88 + 4 * 4 + 28 * 1024 + 8);
+    assert_merge_fails(
+        d,
+        &[&p[0], &cut, &p[2]],
+        "cut.partial",
+        "truncated: 28684 bytes where its header describes 28784",
+    );
+    // Lengths are compared before anything past the tile list is read: a 64 GiB (sparse) file whose
+    // header describes 28,784 bytes, and a device that never ends, are refused without reading them.
+    let long = path(d, "long.partial");
+    std::fs::write(&long, &bytes).unwrap();
+    std::fs::File::options()
+        .write(true)
+        .open(&long)
+        .unwrap()
+        .set_len(1 << 36)
+        .unwrap();
+    assert_merge_fails(
+        d,
+        &[&p[0], &long, &p[2]],
+        "long.partial",
+        "68719476736 bytes, but its header describes 28784",
+    );
+    assert_merge_fails(
+        d,
+        &[&p[0], "/dev/zero", &p[2]],
+        "/dev/zero",
+        "is not a regular file",
+    );
     let mut flipped = bytes.clone();
     flipped[bytes.len() / 2] ^= 4;
     let flip = path(d, "flip.partial");

@@ -21,6 +21,7 @@
 //! Reading checks the magic, the version, the length the header implies, the checksum and every
 //! field's range, so a truncated, bit-flipped or foreign file is named and refused, never half-used.
 
+use std::io::Read;
 use std::ops::Range;
 use std::path::Path;
 
@@ -207,15 +208,114 @@ impl Part {
         .map_err(|e| Error::file(path, format!("cannot write the partial file: {e}")))
     }
 
-    /// Reads and checks a part written by [`Part::write`].
+    /// Reads and checks a part written by [`Part::write`]. The header and the tile list are read first
+    /// and the length they imply is compared with the file's before the pixels are read, so that a
+    /// device such as `/dev/zero` (refused by its type), a truncated file or one much longer than its
+    /// header describes is named without being read into memory.
     pub fn read(path: &Path) -> Result<Part> {
-        let bytes = std::fs::read(path)
-            .map_err(|e| Error::file(path, format!("cannot read the partial file: {e}")))?;
-        Part::from_bytes(&bytes).map_err(|message| Error::file(path, message))
+        read_checked(path).map_err(|message| Error::file(path, message))
     }
 
     /// Parses and checks a part's bytes; the error says what is wrong.
     pub fn from_bytes(bytes: &[u8]) -> std::result::Result<Part, String> {
+        let header = Header::parse(bytes)?;
+        let len = header.file_len(&bytes[HEADER..])?;
+        check_len(bytes.len(), len)?;
+        let body = bytes.len() - 8;
+        let stored = u64::from_le_bytes(bytes[body..].try_into().expect("eight bytes"));
+        let computed = digest::of_bytes(&bytes[..body]);
+        if stored != computed {
+            return Err(format!(
+                "corrupt: checksum {computed:016x} does not match the stored {stored:016x}; render this part again"
+            ));
+        }
+        let Header {
+            settings,
+            first,
+            end,
+            part,
+            count,
+        } = header;
+        if !(first < end && end <= settings.passes) {
+            return Err(format!(
+                "pass range {first}..{end} is not within the render's {} passes",
+                settings.passes
+            ));
+        }
+        if part.0 >= part.1 {
+            return Err(format!("part {}/{} is not a valid K/N", part.0, part.1));
+        }
+        let mut r = Reader { bytes, at: HEADER };
+        let tiles: Vec<u32> = (0..count).map(|_| r.u32()).collect();
+        let pixels = (len - HEADER - 4 * count - 8) / PIXEL;
+        let mut sums = Vec::with_capacity(pixels);
+        let mut counts = Vec::with_capacity(pixels);
+        for _ in 0..pixels {
+            sums.push([r.f64(), r.f64(), r.f64()]);
+            counts.push(r.u32());
+        }
+        if counts.iter().any(|&c| c != end - first) {
+            return Err(format!(
+                "a pixel's pass count differs from its pass range {first}..{end}"
+            ));
+        }
+        Ok(Part {
+            settings,
+            passes: first..end,
+            part,
+            tiles,
+            sums,
+            counts,
+        })
+    }
+}
+
+/// [`Part::read`], its error without the path.
+fn read_checked(path: &Path) -> std::result::Result<Part, String> {
+    let cannot = |e: std::io::Error| format!("cannot read the partial file: {e}");
+    let mut file = std::fs::File::open(path).map_err(cannot)?;
+    let metadata = file.metadata().map_err(cannot)?;
+    if !metadata.is_file() {
+        return Err("is not a regular file (a device, a pipe or a directory), so not a partial file".into());
+    }
+    let len = usize::try_from(metadata.len()).unwrap_or(usize::MAX);
+    // Reads up to `n` more bytes (fewer at the end of the file).
+    let mut bytes = Vec::new();
+    let mut more = |bytes: &mut Vec<u8>, n: usize| {
+        file.by_ref()
+            .take(n as u64)
+            .read_to_end(bytes)
+            .map(drop)
+            .map_err(cannot)
+    };
+    more(&mut bytes, HEADER + 8)?;
+    let header = Header::parse(&bytes)?;
+    more(&mut bytes, 4 * header.count)?;
+    let expected = header.file_len(&bytes[HEADER..])?;
+    check_len(len, expected)?;
+    let rest = expected - bytes.len();
+    more(&mut bytes, rest)?;
+    Part::from_bytes(&bytes)
+}
+
+/// The fixed header of a `.partial` file: the first [`HEADER`] bytes.
+struct Header {
+    settings: Settings,
+    /// The first pass of the part.
+    first: u32,
+    /// One past its last pass.
+    end: u32,
+    /// K of N.
+    part: (u32, u32),
+    /// How many tile indices follow.
+    count: usize,
+}
+
+impl Header {
+    /// Parses the header at the start of `bytes` (which must hold it and the checksum after it) and
+    /// checks what can be checked without the rest: the magic, the version, the resolution, the tile
+    /// size and the tile count.
+    fn parse(bytes: &[u8]) -> std::result::Result<Header, String> {
         if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
             return Err("not a whitted partial file (it does not start with \"WHTPART\")".into());
         }
@@ -248,19 +348,42 @@ impl Part {
                 "tiles of {tile} pixels; this whitted renders tiles of {TILE}"
             ));
         }
+        let tiles = tiles::tiles(width, height).len();
+        if count > tiles {
+            return Err(format!("{count} tiles, but a {width}x{height} frame has {tiles}"));
+        }
+        let settings = Settings {
+            scene,
+            width,
+            height,
+            spp,
+            seed,
+            max_depth,
+            aperture,
+            focal,
+            roughness,
+            passes,
+        };
+        Ok(Header {
+            settings,
+            first,
+            end,
+            part,
+            count,
+        })
+    }
+
+    /// The length of the whole file, from the header and the tile indices at the start of `rest` (the
+    /// bytes after the header), after checking the indices: in the frame and increasing.
+    fn file_len(&self, rest: &[u8]) -> std::result::Result<usize, String> {
+        let expected = |pixels: usize| HEADER + 4 * self.count + PIXEL * pixels + 8;
+        if rest.len() < 4 * self.count + 8 {
+            return Err(truncated(HEADER + rest.len(), expected(0)));
+        }
+        let (width, height) = (self.settings.width, self.settings.height);
         let grid = tiles::tiles(width, height);
-        if count > grid.len() {
-            return Err(format!(
-                "{count} tiles, but a {width}x{height} frame has {}",
-                grid.len()
-            ));
-        }
-        // Everything the header says, checked for size before anything is read by it.
-        let expected = |pixels: usize| HEADER + 4 * count + PIXEL * pixels + 8;
-        if bytes.len() < expected(0) {
-            return Err(truncated(bytes.len(), expected(0)));
-        }
-        let indices: Vec<u32> = (0..count).map(|_| r.u32()).collect();
+        let mut r = Reader { bytes: rest, at: 0 };
+        let indices: Vec<u32> = (0..self.count).map(|_| r.u32()).collect();
         if let Some(bad) = indices.iter().find(|&&i| i as usize >= grid.len()) {
             return Err(format!(
                 "tile {bad} is outside the {width}x{height} frame's {} tiles",
@@ -270,64 +393,16 @@ impl Part {
         if indices.windows(2).any(|w| w[0] >= w[1]) {
             return Err("tile indices are not increasing".into());
         }
-        let pixels: usize = indices.iter().map(|&i| area(grid[i as usize])).sum();
-        if bytes.len() != expected(pixels) {
-            return Err(if bytes.len() < expected(pixels) {
-                truncated(bytes.len(), expected(pixels))
-            } else {
-                format!(
-                    "{} bytes, but its header describes {}",
-                    bytes.len(),
-                    expected(pixels)
-                )
-            });
-        }
-        let body = bytes.len() - 8;
-        let stored = u64::from_le_bytes(bytes[body..].try_into().expect("eight bytes"));
-        let computed = digest::of_bytes(&bytes[..body]);
-        if stored != computed {
-            return Err(format!(
-                "corrupt: checksum {computed:016x} does not match the stored {stored:016x}; render this part again"
-            ));
-        }
-        if !(first < end && end <= passes) {
-            return Err(format!(
-                "pass range {first}..{end} is not within the render's {passes} passes"
-            ));
-        }
-        if part.0 >= part.1 {
-            return Err(format!("part {}/{} is not a valid K/N", part.0, part.1));
-        }
-        let mut sums = Vec::with_capacity(pixels);
-        let mut counts = Vec::with_capacity(pixels);
-        for _ in 0..pixels {
-            sums.push([r.f64(), r.f64(), r.f64()]);
-            counts.push(r.u32());
-        }
-        if counts.iter().any(|&c| c != end - first) {
-            return Err(format!(
-                "a pixel's pass count differs from its pass range {first}..{end}"
-            ));
-        }
-        Ok(Part {
-            settings: Settings {
-                scene,
-                width,
-                height,
-                spp,
-                seed,
-                max_depth,
-                aperture,
-                focal,
-                roughness,
-                passes,
-            },
-            passes: first..end,
-            part,
-            tiles: indices,
-            sums,
-            counts,
-        })
+        Ok(expected(indices.iter().map(|&i| area(grid[i as usize])).sum()))
+    }
+}
+
+/// A file of `len` bytes whose header describes `expected`.
+fn check_len(len: usize, expected: usize) -> std::result::Result<(), String> {
+    match len.cmp(&expected) {
+        std::cmp::Ordering::Less => Err(truncated(len, expected)),
+        std::cmp::Ordering::Greater => Err(format!("{len} bytes, but its header describes {expected}")),
+        std::cmp::Ordering::Equal => Ok(()),
     }
 }
 
@@ -420,6 +495,48 @@ mod tests {
             passes: 4,
         };
         assert_eq!(Settings::new(&scene, &options, 4), expected);
+    }
+
+    /// The length the header implies is compared with the file's before its pixels are read: a file
+    /// cut short or far too long, a device and a directory are refused by what they are.
+    #[cfg(unix)]
+    #[test]
+    fn reads_the_header_first_and_refuses_by_type_and_length() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.partial");
+        let bytes = part().to_bytes();
+        // Tiles 1 and 2 of 20x18 hold 4 x 16 + 16 x 2 = 96 pixels: 88 + 2 x 4 + 96 x 28 + 8 bytes.
+        assert_eq!(bytes.len(), 2792);
+        std::fs::write(&path, &bytes).unwrap();
+        assert_eq!(Part::read(&path).unwrap(), part());
+        let refused = |path: &Path| Part::read(path).unwrap_err().to_string();
+        std::fs::write(&path, &bytes[..2000]).unwrap();
+        assert_eq!(
+            refused(&path),
+            format!(
+                "{}: truncated: 2000 bytes where its header describes 2792",
+                path.display()
+            )
+        );
+        std::fs::write(&path, &bytes).unwrap();
+        let file = std::fs::File::options().write(true).open(&path).unwrap();
+        file.set_len(1 << 36).unwrap();
+        assert_eq!(
+            refused(&path),
+            format!(
+                "{}: 68719476736 bytes, but its header describes 2792",
+                path.display()
+            )
+        );
+        for not_a_file in [Path::new("/dev/zero"), dir.path()] {
+            assert_eq!(
+                refused(not_a_file),
+                format!(
+                    "{}: is not a regular file (a device, a pipe or a directory), so not a partial file",
+                    not_a_file.display()
+                )
+            );
+        }
     }
 
     #[test]
