@@ -1,5 +1,6 @@
-//! Build times over the Stanford dragon (871,414 and 202,520 triangles): ours (BVH2 by midpoint and by
-//! binned SAH, the BVH4 collapsed from the SAH BVH2, the uniform grid) on one thread and on all of them,
+//! Build times over the Stanford dragon (871,414 and 202,520 triangles): ours (every build of the test
+//! kit, `whitted::kit::contestants::BUILDS`: the uniform grid, the BVH2 by midpoint and by binned SAH,
+//! the BVH4 and BVH8 collapsed from an SAH BVH2) on one thread and on all of them,
 //! and obvhs 0.4's CWBVH and BVH2 with its `fast`, `medium` and `very_slow` presets on all threads; then
 //! a table of the median times beside each tree's SAH cost (traversal and intersection cost 1, areas
 //! relative to the root: binary trees compare with binary trees, wide with wide). With
@@ -16,8 +17,8 @@ use common::{obvhs as peer, table};
 use criterion::{Criterion, criterion_group, criterion_main};
 use obvhs::bvh2::Bvh2 as OBvh2;
 use obvhs::cwbvh::CwBvh;
-use whitted::accel::bvh2::Builder;
-use whitted::accel::{Accel, AccelKind, BuildOptions, Prims};
+use whitted::accel::{Accel, Prims};
+use whitted::kit::contestants::BUILDS;
 
 type Preset = (&'static str, fn() -> obvhs::BvhBuildParams);
 
@@ -82,14 +83,7 @@ fn build(c: &mut Criterion) {
             (n, pool.expect("a thread pool"))
         })
         .collect();
-    let sah = Builder::Sah { bins: 12 };
-    let ours = [
-        ("bvh2-midpoint", AccelKind::Bvh2, Builder::Midpoint),
-        ("bvh2-sah", AccelKind::Bvh2, sah),
-        ("bvh4", AccelKind::Bvh4, sah),
-        ("bvh8", AccelKind::Bvh8, sah),
-        ("grid", AccelKind::Grid, sah),
-    ];
+    let id = |name: &str| name.replace(' ', "-");
     for path in common::scenes() {
         let scene = whitted::scene::load(&path).expect("the bench scene loads");
         let name = common::scene_name(&path);
@@ -98,10 +92,9 @@ fn build(c: &mut Criterion) {
         let tris = peer::triangles(&scene);
         let mut g = common::group(c, &group, 8);
         for (threads, pool) in &pools {
-            for (id, kind, builder) in ours {
-                let options = BuildOptions { builder, bins: 12 };
-                g.bench_function(format!("{id}/{threads}-threads"), |b| {
-                    b.iter(|| pool.install(|| Accel::build_with(prims, kind, options)))
+            for build in &BUILDS {
+                g.bench_function(format!("{}/{threads}-threads", id(build.name)), |b| {
+                    b.iter(|| pool.install(|| build.build(prims)))
                 });
             }
         }
@@ -131,15 +124,15 @@ fn build(c: &mut Criterion) {
             table::median(&group, &format!("{id}/{threads}-threads"), since).map(|s| format!("{s:.3}"))
         };
         let mut rows = Vec::new();
-        for (id, kind, builder) in ours {
-            let accel = Accel::build_with(prims, kind, BuildOptions { builder, bins: 12 });
-            let sah = match &accel {
+        for build in &BUILDS {
+            let id = id(build.name);
+            let sah = match &build.build(prims) {
                 Accel::Bvh2(b) => Some(format!("{:.1}", b.stats().sah)),
                 Accel::Bvh4(b) => Some(format!("{:.1}", b.stats().sah)),
                 Accel::Bvh8(b) => Some(format!("{:.1}", b.stats().sah)),
                 _ => None,
             };
-            rows.push((id.to_string(), vec![time(id, 1), time(id, all), sah]));
+            rows.push((id.clone(), vec![time(&id, 1), time(&id, all), sah]));
         }
         for (preset, params) in PRESETS {
             let id = format!("obvhs-cwbvh-{preset}");

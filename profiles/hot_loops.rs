@@ -52,20 +52,24 @@ fn measured_any(trace: impl Fn(&Ray, &mut Hit) -> bool, rays: &[(Ray, f32)]) -> 
     hits
 }
 
-/// Consecutive rays in packets of [`PACKET`], as the renderer's tiles and the kernels bench form them.
+/// Consecutive rays in packets of [`PACKET`], as the renderer's tiles and the kernels bench form them,
+/// through the accelerator's packet verbs.
 #[inline(never)]
-fn measured_packets<const ANY: bool>(bvh: &Bvh4, rays: &[(Ray, f32)]) -> usize {
+fn measured_packets<const ANY: bool>(accel: &Accel, rays: &[(Ray, f32)]) -> usize {
     let mut found = 0;
     for chunk in rays.chunks(PACKET) {
         let mut r = [chunk[0].0; PACKET];
-        let mut hits = [Hit::miss(0.0); PACKET];
-        for (k, (ray, t_max)) in chunk.iter().enumerate() {
-            (r[k], hits[k]) = (*ray, Hit::miss(*t_max));
+        let mut t_max = [0.0; PACKET];
+        for (k, (ray, t)) in chunk.iter().enumerate() {
+            (r[k], t_max[k]) = (*ray, *t);
         }
         let active = (1u16 << chunk.len()).wrapping_sub(1) as u8;
         found += match ANY {
-            true => bvh.traverse_packet::<AnyHit>(&r, active, 0.0, &mut hits),
-            false => bvh.traverse_packet::<Closest>(&r, active, 0.0, &mut hits),
+            true => accel.occluded_packet(&r, active, 0.0, &t_max),
+            false => {
+                let mut hits = t_max.map(Hit::miss);
+                accel.intersect_packet(&r, active, 0.0, &mut hits)
+            }
         }
         .count_ones() as usize;
     }
@@ -142,9 +146,9 @@ fn run(name: &str) -> Result<(), String> {
     let counts = match name {
         "packet-primary" => (
             w.primary.len(),
-            measured_packets::<false>(bvh, &unbounded(&w.primary)),
+            measured_packets::<false>(&accel, &unbounded(&w.primary)),
         ),
-        "packet-shadow" => (w.shadow.len(), measured_packets::<true>(bvh, &w.shadow)),
+        "packet-shadow" => (w.shadow.len(), measured_packets::<true>(&accel, &w.shadow)),
         _ => match single_rays(name, &w, closest, any) {
             Some(counts) => counts,
             None => return Err(format!("unknown loop \"{name}\": expected one of {LOOPS}")),

@@ -14,16 +14,23 @@ use criterion::{BenchmarkGroup, Criterion};
 
 /// The scenes a bench runs on: `WHITTED_BENCH_SCENE` alone, or the workload document's two dragons,
 /// the full one (871,414 triangles, `scenes/dragon_full.p3f`) and res2 (202,520; loaded bare, its
-/// default camera and light are the document's, computed from its bounds).
+/// default camera and light are the document's, computed from its bounds); res2 alone for a smoke run
+/// (`WHITTED_BENCH_QUICK`).
 pub fn scenes() -> Vec<PathBuf> {
     if let Some(path) = std::env::var_os("WHITTED_BENCH_SCENE") {
         return vec![PathBuf::from(path)];
     }
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    vec![
-        dir.join("dragon_full.p3f"),
-        dir.join("models/dragon_vrip_res2.ply.gz"),
-    ]
+    let res2 = dir.join("models/dragon_vrip_res2.ply.gz");
+    if quick() {
+        return vec![res2];
+    }
+    vec![dir.join("dragon_full.p3f"), res2]
+}
+
+/// True for a smoke run: `WHITTED_BENCH_QUICK` is set.
+fn quick() -> bool {
+    std::env::var_os("WHITTED_BENCH_QUICK").is_some()
 }
 
 /// A short name for a scene in bench ids: its file name up to the first dot.
@@ -38,7 +45,7 @@ pub fn scene_name(path: &Path) -> String {
 pub fn group<'a>(c: &'a mut Criterion, name: &str, seconds: u64) -> BenchmarkGroup<'a, WallTime> {
     let mut g = c.benchmark_group(name);
     g.sample_size(10);
-    if std::env::var_os("WHITTED_BENCH_QUICK").is_some() {
+    if quick() {
         g.warm_up_time(Duration::from_millis(100))
             .measurement_time(Duration::from_millis(500));
     } else {

@@ -5,6 +5,7 @@
 use whitted::geometry::ray::Ray;
 
 use crate::common::embree::{EmbreeScene, Handle};
+use crate::contestant::{Contestant, FirstHit, Segment, Side};
 
 const INVALID_ID: u32 = u32::MAX;
 
@@ -199,5 +200,57 @@ impl EmbreeScene {
                 .count();
         }
         hits
+    }
+}
+
+impl FirstHit for EmbreeScene {
+    fn triangle(&self, (ray, t_max): &Segment) -> Option<u32> {
+        self.hit(ray, *t_max)
+    }
+}
+
+/// Embree's single rays (`embree`) or its 8-wide packets (`embree-8`) on one scene.
+pub struct Embree<'a> {
+    scene: &'a EmbreeScene,
+    eight: bool,
+}
+
+impl<'a> Embree<'a> {
+    /// Both kernels on `scene`.
+    pub fn both(scene: &'a EmbreeScene) -> [Embree<'a>; 2] {
+        [false, true].map(|eight| Embree { scene, eight })
+    }
+}
+
+impl Contestant for Embree<'_> {
+    fn id(&self) -> &str {
+        if self.eight { "embree-8" } else { "embree" }
+    }
+
+    fn side(&self) -> Side {
+        Side::Peer
+    }
+
+    fn packets(&self) -> bool {
+        self.eight
+    }
+
+    fn closest(&self, rays: &[Segment]) -> usize {
+        match self.eight {
+            true => self.scene.closest8(rays),
+            false => self.scene.closest(rays),
+        }
+    }
+
+    fn occluded(&self, rays: &[Segment]) -> usize {
+        match self.eight {
+            true => self.scene.occluded8(rays),
+            false => self.scene.occluded(rays),
+        }
+    }
+
+    /// Embree's triangle test is watertight, ours is not: they may part at edges.
+    fn first_hit(&self) -> Option<&dyn FirstHit> {
+        Some(self.scene)
     }
 }

@@ -1,20 +1,25 @@
-//! Kernel throughput on the dragon workload (`shared/bench/dragon-workload.md`), one thread, in Mrays/s
-//! through criterion's throughput: primary rays (closest hit), shadow rays (any hit, and closest hit on
-//! the same rays for comparison, and both on the blocked ones alone) and diffuse bounces (closest hit,
-//! incoherent), for every accelerator, for the BVH4's packet kernel (8 consecutive rays a packet) and for
-//! obvhs 0.4's CWBVH and BVH2 (`very_slow_build`, its best trees, traced with our triangle test); then the
-//! BVH4 and the peers on all threads. Brute force runs on an evenly spaced sample of each set. The
-//! workload's primary-hit count and Σt, and every structure's hit counts (ours and the peers'), are
-//! checked first: a wrong benchmark measures nothing. At the end, a table of the medians side by side.
-//! With `--features bench-embree`, Embree 3 joins them: single rays and 8-wide packets, on its
-//! high-quality (spatial split) BVH. With `--features bench-tinybvh`, tinybvh's BVH8_CPU (closest hit only:
-//! the shadow rays within the light distance; needs `RUSTFLAGS="-C target-cpu=native"`, `tinybvh.rs`).
+//! Kernel throughput on the dragon workload (`shared/bench/dragon-workload.md`), in Mrays/s through
+//! criterion's throughput: one loop over the contestants × the ray sets × one thread and all of them.
+//! The contestants: every structure of the test kit (`whitted::kit::contestants`) with its single-ray
+//! kernel, the wide BVHs with their packet kernel too (8 consecutive rays a packet), and obvhs 0.4's
+//! CWBVH and BVH2 (`very_slow_build`, its best trees, traced with our triangle test); with
+//! `--features bench-embree`, Embree 3's single rays and 8-wide packets on its high-quality (spatial
+//! split) BVH; with `--features bench-tinybvh`, tinybvh's BVH8_CPU (needs
+//! `RUSTFLAGS="-C target-cpu=native"`, `tinybvh.rs`). The ray sets: primary rays (closest hit), shadow
+//! rays (any hit) and diffuse bounces (closest hit, incoherent).
+//!
+//! Before anything is measured, the workload's primary-hit count and Σt are checked (against the
+//! workload document's figures on the full dragon), the reference's hit counts against brute force on a
+//! sample of each set, and every contestant's hit counts on every set against the reference's: a wrong
+//! benchmark measures nothing. Brute force is timed on those samples. At the end, a table of the medians
+//! side by side, per thread count.
 //!
 //! `cargo bench --bench kernels`; `WHITTED_BENCH_QUICK=1` for a smoke run; `WHITTED_BENCH_SCENE` for one
 //! other scene (default: the full dragon, then res2).
 
 #[path = "../common/mod.rs"]
 mod common;
+mod contestant;
 #[cfg(feature = "bench-embree")]
 mod embree;
 mod peer;
@@ -25,79 +30,50 @@ use std::hint::black_box;
 use std::time::SystemTime;
 
 use common::{obvhs as obvhs_build, table};
+use contestant::{Contestant, Ours, Segment, Side};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use peer::Traced;
 use rayon::prelude::*;
-use whitted::accel::PACKET;
-#[cfg(any(feature = "bench-embree", feature = "bench-tinybvh"))]
-use whitted::accel::PrimKind;
-use whitted::accel::bvh2::Builder;
-use whitted::accel::policy::{AnyHit, Closest};
-use whitted::accel::wide::{Simd, WideBvh};
-use whitted::accel::{Accel, AccelKind, BuildOptions, Hit, Prims};
+use whitted::accel::{Accel, AccelKind, Hit, PrimKind, Prims};
 use whitted::geometry::ray::Ray;
+use whitted::kit::contestants as kit;
 use whitted::kit::workload::{self, Workload};
 
 /// Rays of each set that brute force traces (it tests all 871k triangles per ray).
 const BRUTE_SAMPLE: usize = 64;
 
-fn closest(accel: &Accel, rays: &[Ray]) -> usize {
-    let mut hits = 0;
-    for ray in rays {
-        let mut hit = Hit::miss(f32::INFINITY);
-        hits += accel.intersect(ray, 0.0, &mut hit) as usize;
-    }
-    hits
+/// A ray set: its name in bench ids, its segments, which query it asks and the reference's hit count.
+pub struct Set {
+    pub name: &'static str,
+    pub rays: Vec<Segment>,
+    /// Any hit (shadow rays) rather than closest hit.
+    pub any: bool,
+    pub hits: usize,
 }
 
-fn any(accel: &Accel, rays: &[(Ray, f32)]) -> usize {
-    rays.iter()
-        .filter(|(ray, t_max)| accel.occluded(ray, 0.0, *t_max))
-        .count()
-}
-
-/// Closest hit on segments (the shadow rays): the same rays as [`any`], the other kernel.
-fn closest_within(accel: &Accel, rays: &[(Ray, f32)]) -> usize {
-    let mut hits = 0;
-    for (ray, t_max) in rays {
-        let mut hit = Hit::miss(*t_max);
-        hits += accel.intersect(ray, 0.0, &mut hit) as usize;
-    }
-    hits
-}
-
-/// Rays in packets of eight, each with its `t_max`.
-type Packet = ([Ray; PACKET], [f32; PACKET], u8);
-type Packets = Vec<Packet>;
-
-fn packets(rays: &[(Ray, f32)]) -> Packets {
-    rays.chunks(PACKET)
-        .map(|c| {
-            let mut r = [c[0].0; PACKET];
-            let mut t = [0.0; PACKET];
-            for (k, (ray, t_max)) in c.iter().enumerate() {
-                (r[k], t[k]) = (*ray, *t_max);
-            }
-            (r, t, (1u16 << c.len()).wrapping_sub(1) as u8)
-        })
-        .collect()
-}
-
-fn packet_hits<const ANY: bool, const W: usize>(bvh: &WideBvh<W>, packets: &[Packet]) -> usize {
-    let mut hits = 0;
-    for (rays, t_max, active) in packets {
-        let mut h = t_max.map(Hit::miss);
-        let found = if ANY {
-            bvh.traverse_packet::<AnyHit>(rays, *active, 0.0, &mut h)
+impl Set {
+    /// `c`'s answer to this set's query on `rays` (the set's rays or a part of them).
+    fn trace(&self, c: &dyn Contestant, rays: &[Segment]) -> usize {
+        if self.any {
+            c.occluded(rays)
         } else {
-            bvh.traverse_packet::<Closest>(rays, *active, 0.0, &mut h)
-        };
-        hits += found.count_ones() as usize;
+            c.closest(rays)
+        }
     }
-    hits
 }
 
-#[cfg(any(feature = "bench-embree", feature = "bench-tinybvh"))]
+/// Counts over `items` split across the rayon pool in chunks of 256 rays (32 packets): the all-threads
+/// rows.
+fn par<T: Sync>(items: &[T], count: impl Fn(&[T]) -> usize + Sync + Send) -> usize {
+    items.par_chunks(256).map(count).sum()
+}
+
+/// An evenly spaced sample of `v`.
+fn sample<T: Copy>(v: &[T]) -> Vec<T> {
+    let step = (v.len() / BRUTE_SAMPLE).max(1);
+    v.iter().step_by(step).take(BRUTE_SAMPLE).copied().collect()
+}
+
 /// Barycentric distance (exact enough: f64) of the point where `ray` crosses the plane of triangle
 /// `[a, b, c]` from the triangle's nearest edge: min(u, v, 1 − u − v), negative outside.
 fn edge_margin(ray: &Ray, [a, b, c]: [glam::Vec3; 3]) -> f64 {
@@ -111,23 +87,22 @@ fn edge_margin(ray: &Ray, [a, b, c]: [glam::Vec3; 3]) -> f64 {
     u.min(v).min(1.0 - u - v)
 }
 
-#[cfg(any(feature = "bench-embree", feature = "bench-tinybvh"))]
 /// A peer with its own triangle test may round differently from ours on rays that cross within f32
-/// precision of an edge (ours is not watertight, `geometry/triangle.rs`): where the hit counts differ,
-/// every ray on which the peer (`theirs`: the triangle a segment hits first) and we disagree must cross
-/// within 1e-5 of an edge of the triangle that the side that hit reports. Anything else is a bug and
-/// fails the bench.
+/// precision of an edge (ours is not watertight, `geometry/triangle.rs`): where its hit count on `set`
+/// differs from ours, every ray on which it (`theirs`: the triangle a segment hits first) and the
+/// reference disagree must cross within 1e-5 of an edge of the triangle that the side that hit reports.
+/// Anything else is a bug and fails the bench.
 fn reconcile(
     peer: &str,
-    rays: &[(Ray, f32)],
-    theirs: impl Fn(&(Ray, f32)) -> Option<u32>,
+    set: &Set,
+    theirs: &dyn contestant::FirstHit,
     ours: &Accel,
     scene: &whitted::scene::Scene,
 ) {
     const EDGE: f64 = 1e-5;
     let prims = Prims::new(scene);
     let (mut differ, mut worst) = (0, 0.0f64);
-    for (i, r) in rays.iter().enumerate() {
+    for (i, r) in set.rays.iter().enumerate() {
         let mut hit = Hit::miss(r.1);
         let ours = ours
             .intersect(&r.0, 0.0, &mut hit)
@@ -135,7 +110,7 @@ fn reconcile(
                 PrimKind::Triangle(t) => t as u32,
                 _ => panic!("the bench scene holds triangles only"),
             });
-        let theirs = theirs(r);
+        let theirs = theirs.triangle(r);
         let Some(tri) = (match (ours, theirs) {
             (Some(_), Some(_)) | (None, None) => None,
             (hit, None) | (None, hit) => hit,
@@ -145,7 +120,8 @@ fn reconcile(
         let margin = edge_margin(&r.0, scene.triangles.vertices(tri as usize));
         assert!(
             margin.abs() < EDGE,
-            "{peer}: ray {i} {:?} (t_max {}): ours {ours:?}, theirs {theirs:?}, {margin} from an edge",
+            "{peer} {}: ray {i} {:?} (t_max {}): ours {ours:?}, theirs {theirs:?}, {margin} from an edge",
+            set.name,
             r.0,
             r.1
         );
@@ -153,23 +129,26 @@ fn reconcile(
         worst = worst.max(margin.abs());
     }
     eprintln!(
-        "{peer}: {differ} of {} rays differ from ours, all within {worst:.1e} of a triangle edge",
-        rays.len()
+        "{peer} {}: {differ} of {} rays differ from ours, all within {worst:.1e} of a triangle edge",
+        set.name,
+        set.rays.len()
     );
 }
 
-fn sample<T: Copy>(v: &[T]) -> Vec<T> {
-    let step = (v.len() / BRUTE_SAMPLE).max(1);
-    v.iter().step_by(step).take(BRUTE_SAMPLE).copied().collect()
+/// Checks `c`'s hit count on every set against the reference's; a peer with its own triangle test is
+/// reconciled ray by ray where they differ ([`reconcile`]), anything else must match exactly.
+fn check(c: &dyn Contestant, sets: &[Set], reference: &Accel, scene: &whitted::scene::Scene) {
+    for set in sets {
+        let got = set.trace(c, &set.rays);
+        if got == set.hits {
+            continue;
+        }
+        match c.first_hit() {
+            Some(theirs) => reconcile(c.id(), set, theirs, reference, scene),
+            None => panic!("{} {}: {got} hits, the reference {}", c.id(), set.name, set.hits),
+        }
+    }
 }
-
-/// Counts over `items` split across the rayon pool: the all-threads rows.
-fn par<T: Sync>(items: &[T], count: impl Fn(&[T]) -> usize + Sync + Send) -> usize {
-    items.par_chunks(256).map(count).sum()
-}
-
-/// The three ray sets in the table: name, rays traced, and the ids of each column's bench.
-const SETS: [&str; 3] = ["primary", "shadow-any", "diffuse"];
 
 fn kernels(c: &mut Criterion) {
     let since = SystemTime::now();
@@ -181,22 +160,14 @@ fn kernels(c: &mut Criterion) {
 fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     let scene = whitted::scene::load(path).expect("the bench scene loads");
     let prims = Prims::new(&scene);
-    let with = |kind, builder| Accel::build_with(prims, kind, BuildOptions { builder, bins: 12 });
-    let sah = Builder::Sah { bins: 12 };
-    // The BVH8 on its portable slab test too (two SSE halves), beside the AVX2 one where the CPU has it.
-    let mut bvh8_portable = with(AccelKind::Bvh8, sah);
-    if let Accel::Bvh8(b) = &mut bvh8_portable {
-        b.set_simd(Simd::Portable);
-    }
-    let accels = [
-        ("bvh4", with(AccelKind::Bvh4, sah)),
-        ("bvh8", with(AccelKind::Bvh8, sah)),
-        ("bvh8-portable", bvh8_portable),
-        ("bvh2-sah", with(AccelKind::Bvh2, sah)),
-        ("bvh2-midpoint", with(AccelKind::Bvh2, Builder::Midpoint)),
-        ("grid", with(AccelKind::Grid, sah)),
-    ];
-    let w: Workload = workload::generate(&scene, &accels[0].1, 1);
+    let built = kit::all(prims);
+    // The reference: the grid, brute force's answer bit for bit (`tests/accel_vs_brute.rs`).
+    let reference = &built
+        .iter()
+        .find(|b| b.is_grid())
+        .expect("the kit lists the grid")
+        .accel;
+    let w: Workload = workload::generate(&scene, reference, 1);
     eprintln!(
         "{}: {} primary rays, {} hits, sum t = {:.2}; {} shadow and {} diffuse rays",
         path.display(),
@@ -215,355 +186,139 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
             w.sum_t
         );
     }
-    let hits_shadow = any(&accels[0].1, &w.shadow);
-    let hits_diffuse = closest(&accels[0].1, &w.diffuse);
-    for (name, accel) in &accels {
-        // Every structure finds the same hits on the same rays, with either kernel.
-        assert_eq!(closest(accel, &w.primary), w.primary_hits, "{name} primary hits");
-        assert_eq!(any(accel, &w.shadow), hits_shadow, "{name} shadow hits");
+    let whole = |rays: &[Ray]| rays.iter().map(|r| (*r, f32::INFINITY)).collect();
+    let mut sets = [
+        Set {
+            name: "primary",
+            rays: whole(&w.primary),
+            any: false,
+            hits: w.primary_hits,
+        },
+        Set {
+            name: "shadow-any",
+            rays: w.shadow.clone(),
+            any: true,
+            hits: 0,
+        },
+        Set {
+            name: "diffuse",
+            rays: whole(&w.diffuse),
+            any: false,
+            hits: 0,
+        },
+    ];
+    let ours = Ours::all(&built);
+    let brute = Accel::build(prims, AccelKind::None);
+    let brute = Ours::new("brute", &brute, false);
+    let reference_row = Ours::new("grid", reference, false);
+    for set in &mut sets {
+        set.hits = set.trace(&reference_row, &set.rays);
+        // The reference against brute force on a sample.
+        let s = sample(&set.rays);
         assert_eq!(
-            closest_within(accel, &w.shadow),
-            hits_shadow,
-            "{name} shadow hits"
+            set.trace(&brute, &s),
+            set.trace(&reference_row, &s),
+            "the grid against brute force, {} sample",
+            set.name
         );
-        assert_eq!(closest(accel, &w.diffuse), hits_diffuse, "{name} diffuse hits");
     }
-    let (Accel::Bvh4(bvh4), Accel::Bvh8(bvh8)) = (&accels[0].1, &accels[1].1) else {
-        panic!("the bench scene fits the wide BVHs")
-    };
-    let unbounded = |rays: &[Ray]| rays.iter().map(|r| (*r, f32::INFINITY)).collect::<Vec<_>>();
-    let primary_segments = unbounded(&w.primary);
-    let diffuse_segments = unbounded(&w.diffuse);
-    let primary_packets = packets(&primary_segments);
-    let shadow_packets = packets(&w.shadow);
-    let diffuse_packets = packets(&diffuse_segments);
-    assert_eq!(packet_hits::<false, 4>(bvh4, &primary_packets), w.primary_hits);
-    assert_eq!(packet_hits::<true, 4>(bvh4, &shadow_packets), hits_shadow);
-    assert_eq!(packet_hits::<false, 4>(bvh4, &diffuse_packets), hits_diffuse);
-    assert_eq!(packet_hits::<false, 8>(bvh8, &primary_packets), w.primary_hits);
-    assert_eq!(packet_hits::<true, 8>(bvh8, &shadow_packets), hits_shadow);
-    assert_eq!(packet_hits::<false, 8>(bvh8, &diffuse_packets), hits_diffuse);
 
-    // The peers, on their best trees, must find the same hits: a mismatch is a bug on one side.
+    // The peers, on their best trees.
     let tris = obvhs_build::triangles(&scene);
     let params = obvhs::BvhBuildParams::very_slow_build();
-    let cwbvh = Traced::new(obvhs_build::cwbvh(&tris, params), &tris);
-    let obvh2 = Traced::new(obvhs_build::bvh2(&tris, params), &tris);
-    assert_eq!(
-        cwbvh.closest(&w.primary),
-        w.primary_hits,
-        "obvhs cwbvh primary hits"
-    );
-    assert_eq!(cwbvh.occluded(&w.shadow), hits_shadow, "obvhs cwbvh shadow hits");
-    assert_eq!(
-        cwbvh.closest(&w.diffuse),
-        hits_diffuse,
-        "obvhs cwbvh diffuse hits"
-    );
-    assert_eq!(
-        obvh2.closest(&w.primary),
-        w.primary_hits,
-        "obvhs bvh2 primary hits"
-    );
-    assert_eq!(obvh2.occluded(&w.shadow), hits_shadow, "obvhs bvh2 shadow hits");
-    assert_eq!(obvh2.closest(&w.diffuse), hits_diffuse, "obvhs bvh2 diffuse hits");
+    let cwbvh = Traced::new("obvhs-cwbvh", obvhs_build::cwbvh(&tris, params), &tris);
+    let obvh2 = Traced::new("obvhs-bvh2", obvhs_build::bvh2(&tris, params), &tris);
     #[cfg(feature = "bench-embree")]
-    let embree = {
-        use common::embree::EmbreeScene;
+    let embree_scene = {
         let all = std::thread::available_parallelism().map_or(1, |n| n.get());
-        let e = EmbreeScene::new(&scene, all, true);
-        for (set, rays, any, hits) in [
-            ("primary", &primary_segments, false, w.primary_hits),
-            ("shadow", &w.shadow, true, hits_shadow),
-            ("diffuse", &diffuse_segments, false, hits_diffuse),
-        ] {
-            let (one, eight) = match any {
-                true => (e.occluded(rays), e.occluded8(rays)),
-                false => (e.closest(rays), e.closest8(rays)),
-            };
-            if one != hits || eight != hits {
-                reconcile(
-                    &format!("Embree {set}"),
-                    rays,
-                    |(r, t)| e.hit(r, *t),
-                    &accels[0].1,
-                    &scene,
-                );
-            }
-        }
-        e
+        common::embree::EmbreeScene::new(&scene, all, true)
     };
+    #[cfg(feature = "bench-embree")]
+    let embree = embree::Embree::both(&embree_scene);
     #[cfg(feature = "bench-tinybvh")]
-    let tiny = tinybvh::Tiny::new(&scene).checked(
-        [
-            ("primary", &primary_segments, w.primary_hits),
-            ("shadow", &w.shadow, hits_shadow),
-            ("diffuse", &diffuse_segments, hits_diffuse),
-        ],
-        &accels[0].1,
-        &scene,
-    );
+    let tiny = tinybvh::Tiny::new(&scene).usable(&sets);
+
+    let mut contestants: Vec<&dyn Contestant> = ours.iter().map(|o| o as &dyn Contestant).collect();
+    contestants.extend([&cwbvh as &dyn Contestant, &obvh2]);
+    #[cfg(feature = "bench-embree")]
+    contestants.extend(embree.iter().map(|e| e as &dyn Contestant));
+    #[cfg(feature = "bench-tinybvh")]
+    contestants.extend(tiny.as_ref().map(|t| t as &dyn Contestant));
+    // Every contestant finds the reference's hits on every set: a mismatch is a bug on one side.
+    for c in &contestants {
+        check(*c, &sets, reference, &scene);
+    }
 
     let name = common::scene_name(path);
     let group = format!("kernels-{name}");
     let mut g = common::group(c, &group, 4);
-    let (n_primary, n_shadow, n_diffuse) = (
-        w.primary.len() as u64,
-        w.shadow.len() as u64,
-        w.diffuse.len() as u64,
-    );
-    for (name, accel) in &accels {
-        g.throughput(Throughput::Elements(n_primary));
-        g.bench_function(format!("{name}/primary"), |b| {
-            b.iter(|| closest(accel, black_box(&w.primary)))
-        });
-        g.throughput(Throughput::Elements(n_shadow));
-        g.bench_function(format!("{name}/shadow-any"), |b| {
-            b.iter(|| any(accel, black_box(&w.shadow)))
-        });
-        g.bench_function(format!("{name}/shadow-closest"), |b| {
-            b.iter(|| closest_within(accel, black_box(&w.shadow)))
-        });
-        g.throughput(Throughput::Elements(n_diffuse));
-        g.bench_function(format!("{name}/diffuse"), |b| {
-            b.iter(|| closest(accel, black_box(&w.diffuse)))
-        });
-    }
-    // The shadow rays that something blocks (6.4% on the full dragon): where any hit can stop early
-    // and closest hit cannot. On the unblocked rest both must prove the whole segment empty.
-    let blocked: Vec<(Ray, f32)> = w
-        .shadow
-        .iter()
-        .filter(|(r, t)| accels[0].1.occluded(r, 0.0, *t))
-        .copied()
-        .collect();
-    eprintln!(
-        "{} of the {} shadow rays are blocked",
-        blocked.len(),
-        w.shadow.len()
-    );
-    for (name, accel) in accels
-        .iter()
-        .filter(|(n, _)| ["bvh4", "bvh8", "bvh2-sah"].contains(n))
-    {
-        g.throughput(Throughput::Elements(blocked.len() as u64));
-        g.bench_function(format!("{name}/blocked-any"), |b| {
-            b.iter(|| any(accel, black_box(&blocked)))
-        });
-        g.bench_function(format!("{name}/blocked-closest"), |b| {
-            b.iter(|| closest_within(accel, black_box(&blocked)))
-        });
-    }
-    let packet_sets = [
-        (&primary_packets, false),
-        (&shadow_packets, true),
-        (&diffuse_packets, false),
-    ];
-    for (set, (p, any)) in SETS.iter().zip(packet_sets) {
-        g.throughput(Throughput::Elements(
-            p.iter().map(|p| p.2.count_ones() as u64).sum(),
-        ));
-        g.bench_function(format!("bvh4-packet/{set}"), |b| {
-            b.iter(|| match any {
-                true => packet_hits::<true, 4>(bvh4, black_box(p)),
-                false => packet_hits::<false, 4>(bvh4, black_box(p)),
-            })
-        });
-        g.bench_function(format!("bvh8-packet/{set}"), |b| {
-            b.iter(|| match any {
-                true => packet_hits::<true, 8>(bvh8, black_box(p)),
-                false => packet_hits::<false, 8>(bvh8, black_box(p)),
-            })
-        });
-    }
-    macro_rules! peer {
-        ($id:literal, $t:expr) => {
-            g.throughput(Throughput::Elements(n_primary));
-            g.bench_function(concat!($id, "/primary"), |b| {
-                b.iter(|| $t.closest(black_box(&w.primary)))
-            });
-            g.throughput(Throughput::Elements(n_shadow));
-            g.bench_function(concat!($id, "/shadow-any"), |b| {
-                b.iter(|| $t.occluded(black_box(&w.shadow)))
-            });
-            g.throughput(Throughput::Elements(n_diffuse));
-            g.bench_function(concat!($id, "/diffuse"), |b| {
-                b.iter(|| $t.closest(black_box(&w.diffuse)))
-            });
-        };
-    }
-    peer!("obvhs-cwbvh", cwbvh);
-    peer!("obvhs-bvh2", obvh2);
-    // tinybvh: closest hit on every set (the shadow rays within the light distance: it has no any hit).
-    #[cfg(feature = "bench-tinybvh")]
-    if let Some(tiny) = &tiny {
-        for (set, rays, n) in [
-            ("primary", &primary_segments, n_primary),
-            ("shadow-any", &w.shadow, n_shadow),
-            ("diffuse", &diffuse_segments, n_diffuse),
-        ] {
-            g.throughput(Throughput::Elements(n));
-            g.bench_function(format!("{}/{set}", tinybvh::ID), |b| {
-                b.iter(|| tiny.closest(black_box(rays)))
-            });
-        }
-    }
-
-    // All threads: the same work split in chunks of 256 rays (32 packets) across rayon's pool.
     let all = rayon::current_num_threads();
-    for (name, accel) in accels.iter().filter(|(n, _)| ["bvh4", "bvh8"].contains(n)) {
-        g.throughput(Throughput::Elements(n_primary));
-        g.bench_function(format!("{name}/primary/{all}-threads"), |b| {
-            b.iter(|| par(black_box(&w.primary), |r| closest(accel, r)))
-        });
-        g.throughput(Throughput::Elements(n_shadow));
-        g.bench_function(format!("{name}/shadow-any/{all}-threads"), |b| {
-            b.iter(|| par(black_box(&w.shadow), |r| any(accel, r)))
-        });
-        g.throughput(Throughput::Elements(n_diffuse));
-        g.bench_function(format!("{name}/diffuse/{all}-threads"), |b| {
-            b.iter(|| par(black_box(&w.diffuse), |r| closest(accel, r)))
-        });
-    }
-    g.throughput(Throughput::Elements(n_primary));
-    g.bench_function(format!("bvh4-packet/primary/{all}-threads"), |b| {
-        b.iter(|| par(black_box(&primary_packets), |p| packet_hits::<false, 4>(bvh4, p)))
-    });
-    g.bench_function(format!("obvhs-cwbvh/primary/{all}-threads"), |b| {
-        b.iter(|| par(black_box(&w.primary), |r| cwbvh.closest(r)))
-    });
-    g.throughput(Throughput::Elements(n_shadow));
-    g.bench_function(format!("bvh4-packet/shadow-any/{all}-threads"), |b| {
-        b.iter(|| par(black_box(&shadow_packets), |p| packet_hits::<true, 4>(bvh4, p)))
-    });
-    g.bench_function(format!("obvhs-cwbvh/shadow-any/{all}-threads"), |b| {
-        b.iter(|| par(black_box(&w.shadow), |r| cwbvh.occluded(r)))
-    });
-    g.throughput(Throughput::Elements(n_diffuse));
-    g.bench_function(format!("bvh4-packet/diffuse/{all}-threads"), |b| {
-        b.iter(|| par(black_box(&diffuse_packets), |p| packet_hits::<false, 4>(bvh4, p)))
-    });
-    g.bench_function(format!("obvhs-cwbvh/diffuse/{all}-threads"), |b| {
-        b.iter(|| par(black_box(&w.diffuse), |r| cwbvh.closest(r)))
-    });
-    // Embree, single rays and 8-wide packets, on one thread and on all of them.
-    #[cfg(feature = "bench-embree")]
-    for threaded in [false, true] {
-        type Kernel<'k> = &'k (dyn Fn(&[(Ray, f32)]) -> usize + Sync);
-        let suffix = if threaded {
-            format!("/{all}-threads")
-        } else {
-            String::new()
-        };
-        let run = |rays: &[(Ray, f32)], f: Kernel| if threaded { par(rays, f) } else { f(rays) };
-        for (set, rays, any, n) in [
-            ("primary", &primary_segments, false, n_primary),
-            ("shadow-any", &w.shadow, true, n_shadow),
-            ("diffuse", &diffuse_segments, false, n_diffuse),
-        ] {
-            g.throughput(Throughput::Elements(n));
-            g.bench_function(format!("embree/{set}{suffix}"), |b| {
-                b.iter(|| match any {
-                    true => run(black_box(rays), &|r| embree.occluded(r)),
-                    false => run(black_box(rays), &|r| embree.closest(r)),
-                })
-            });
-            g.bench_function(format!("embree-8/{set}{suffix}"), |b| {
-                b.iter(|| match any {
-                    true => run(black_box(rays), &|r| embree.occluded8(r)),
-                    false => run(black_box(rays), &|r| embree.closest8(r)),
-                })
-            });
+    let suffix = |threads: usize| match threads {
+        1 => String::new(),
+        t => format!("/{t}-threads"),
+    };
+    for threads in [1, all] {
+        for c in &contestants {
+            for set in &sets {
+                g.throughput(Throughput::Elements(set.rays.len() as u64));
+                g.bench_function(format!("{}/{}{}", c.id(), set.name, suffix(threads)), |b| {
+                    b.iter(|| match threads {
+                        1 => set.trace(*c, black_box(&set.rays)),
+                        _ => par(black_box(&set.rays), |r| set.trace(*c, r)),
+                    })
+                });
+            }
         }
     }
     g.finish();
 
-    let brute = Accel::build(prims, AccelKind::None);
-    let (primary, shadow, diffuse) = (sample(&w.primary), sample(&w.shadow), sample(&w.diffuse));
-    for (name, accel) in &accels {
-        assert_eq!(
-            closest(&brute, &primary),
-            closest(accel, &primary),
-            "{name} vs brute force"
-        );
-    }
     let sample_group = format!("{group}-sample");
     let mut g = common::group(c, &sample_group, 4);
-    g.throughput(Throughput::Elements(primary.len() as u64));
-    g.bench_function("brute/primary", |b| {
-        b.iter(|| closest(&brute, black_box(&primary)))
-    });
-    g.throughput(Throughput::Elements(shadow.len() as u64));
-    g.bench_function("brute/shadow-any", |b| b.iter(|| any(&brute, black_box(&shadow))));
-    g.throughput(Throughput::Elements(diffuse.len() as u64));
-    g.bench_function("brute/diffuse", |b| {
-        b.iter(|| closest(&brute, black_box(&diffuse)))
-    });
+    for set in &sets {
+        let s = sample(&set.rays);
+        g.throughput(Throughput::Elements(s.len() as u64));
+        g.bench_function(format!("brute/{}", set.name), |b| {
+            b.iter(|| set.trace(&brute, black_box(&s)))
+        });
+    }
     g.finish();
 
-    // The side-by-side table, in Mrays/s, with our kernels' ratios to the best peer of each kind.
-    let counts = [n_primary, n_shadow, n_diffuse].map(|n| n as f64);
-    let mrays = |id: String, n: f64| table::median(&group, &id, since).map(|s| n / s * 1e-6);
-    let ratio = |a: Option<f64>, b: Option<f64>| a.zip(b).map(|(a, b)| format!("{:.2}x", a / b));
-    let mut columns = vec![
-        "bvh4",
-        "bvh8",
-        "bvh4-packet",
-        "bvh8-packet",
-        "bvh2-sah",
-        "obvhs-cwbvh",
-        "obvhs-bvh2",
-    ];
-    if cfg!(feature = "bench-embree") {
-        columns.extend(["embree", "embree-8"]);
-    }
-    #[cfg(feature = "bench-tinybvh")]
-    columns.push(tinybvh::ID);
-    let mut header = vec!["rays"];
-    header.extend(&columns);
-    header.extend(["best single / best obvhs", "best packets / best obvhs"]);
-    if cfg!(feature = "bench-embree") {
-        header.extend(["best single / embree", "best packets / embree-8"]);
-    }
-    #[cfg(feature = "bench-tinybvh")]
-    let tiny_ratio = format!("best single / {}", tinybvh::ID);
-    #[cfg(feature = "bench-tinybvh")]
-    header.push(&tiny_ratio);
+    // The side-by-side table in Mrays/s, one row per contestant, then our best of each kind (single
+    // rays, packets) over each peer of that kind.
+    let mrays = |id: &str, set: &Set, threads: usize| {
+        table::median(&group, &format!("{id}/{}{}", set.name, suffix(threads)), since)
+            .map(|s| set.rays.len() as f64 / s * 1e-6)
+    };
+    let mut header = vec!["contestant"];
+    header.extend(sets.iter().map(|s| s.name));
     for threads in [1, all] {
-        let suffix = match threads {
-            1 => String::new(),
-            t => format!("/{t}-threads"),
-        };
-        let rows: Vec<(String, Vec<Option<String>>)> = SETS
+        let speed = |c: &dyn Contestant| sets.iter().map(|s| mrays(c.id(), s, threads)).collect::<Vec<_>>();
+        let mut rows: Vec<(String, Vec<Option<String>>)> = contestants
             .iter()
-            .zip(counts)
-            .map(|(set, n)| {
-                let v: Vec<Option<f64>> = columns
-                    .iter()
-                    .map(|col| mrays(format!("{col}/{set}{suffix}"), n))
-                    .collect();
-                let col = |name: &str| v[columns.iter().position(|c| *c == name).expect("a column")];
-                let obvhs = col("obvhs-cwbvh")
-                    .into_iter()
-                    .chain(col("obvhs-bvh2"))
-                    .reduce(f64::max);
-                let mut cells: Vec<Option<String>> = v.iter().map(|x| x.map(|x| format!("{x:.2}"))).collect();
-                let single = col("bvh4").into_iter().chain(col("bvh8")).reduce(f64::max);
-                let packets = col("bvh4-packet")
-                    .into_iter()
-                    .chain(col("bvh8-packet"))
-                    .reduce(f64::max);
-                cells.push(ratio(single, obvhs));
-                cells.push(ratio(packets, obvhs));
-                if cfg!(feature = "bench-embree") {
-                    cells.push(ratio(single, col("embree")));
-                    cells.push(ratio(packets, col("embree-8")));
-                }
-                #[cfg(feature = "bench-tinybvh")]
-                cells.push(ratio(single, col(tinybvh::ID)));
-                (set.to_string(), cells)
+            .map(|c| {
+                let cells = speed(*c).iter().map(|v| v.map(|v| format!("{v:.2}"))).collect();
+                (c.id().to_string(), cells)
             })
             .collect();
+        let best = |packets: bool| {
+            let mine: Vec<Vec<Option<f64>>> = contestants
+                .iter()
+                .filter(|c| c.side() == Side::Ours && c.packets() == packets)
+                .map(|c| speed(*c))
+                .collect();
+            (0..sets.len())
+                .map(|i| mine.iter().filter_map(|v| v[i]).reduce(f64::max))
+                .collect::<Vec<_>>()
+        };
+        for peer in contestants.iter().filter(|c| c.side() == Side::Peer) {
+            let kind = if peer.packets() { "packets" } else { "single rays" };
+            let cells = best(peer.packets())
+                .into_iter()
+                .zip(speed(*peer))
+                .map(|(a, b)| a.zip(b).map(|(a, b)| format!("{:.2}x", a / b)))
+                .collect();
+            rows.push((format!("our best {kind} / {}", peer.id()), cells));
+        }
         let title = format!(
             "{}: Mrays/s, {threads} thread{} (criterion medians)",
             path.display(),

@@ -11,6 +11,8 @@ use obvhs::triangle::Triangle;
 use whitted::geometry::ray::Ray;
 use whitted::geometry::triangle;
 
+use crate::contestant::{Contestant, Segment, Side};
+
 /// What the two layouts share: the primitive order of their leaves and their closest-hit and miss
 /// traversals (same signatures, separate types).
 pub trait Layout: Sync {
@@ -39,14 +41,15 @@ macro_rules! layout {
 layout!(CwBvh);
 layout!(Bvh2);
 
-/// An obvhs hierarchy and its triangles in leaf order, as `(v0, e1, e2)`.
+/// An obvhs hierarchy and its triangles in leaf order, as `(v0, e1, e2)`, under its bench id.
 pub struct Traced<B> {
+    id: &'static str,
     bvh: B,
     tris: Vec<[Vec3; 3]>,
 }
 
 impl<B: Layout> Traced<B> {
-    pub fn new(bvh: B, tris: &[Triangle]) -> Self {
+    pub fn new(id: &'static str, bvh: B, tris: &[Triangle]) -> Self {
         let tris = bvh
             .indices()
             .iter()
@@ -55,7 +58,7 @@ impl<B: Layout> Traced<B> {
                 [t.v0.into(), (t.v1 - t.v0).into(), (t.v2 - t.v0).into()]
             })
             .collect();
-        Traced { bvh, tris }
+        Traced { id, bvh, tris }
     }
 
     /// Our triangle test of leaf slot `id` within `(0, t_max)`; ∞ for a miss.
@@ -68,20 +71,34 @@ impl<B: Layout> Traced<B> {
     fn to_obvhs(ray: &Ray, t_max: f32) -> ORay {
         ORay::new(ray.origin.into(), ray.dir.into(), 0.0, t_max)
     }
+}
 
-    /// Closest hits of unbounded rays: how many hit.
-    pub fn closest(&self, rays: &[Ray]) -> usize {
+impl<B: Layout> Contestant for Traced<B> {
+    fn id(&self) -> &str {
+        self.id
+    }
+
+    fn side(&self) -> Side {
+        Side::Peer
+    }
+
+    fn packets(&self) -> bool {
+        false
+    }
+
+    /// `ray_traverse`, closest hit.
+    fn closest(&self, rays: &[Segment]) -> usize {
         rays.iter()
-            .filter(|ray| {
+            .filter(|(ray, t_max)| {
                 let mut hit = RayHit::none();
-                let o = Self::to_obvhs(ray, f32::INFINITY);
+                let o = Self::to_obvhs(ray, *t_max);
                 self.bvh.closest(o, &mut hit, |o, id| self.test(ray, id, o.tmax))
             })
             .count()
     }
 
-    /// Any hit on segments (`ray_traverse_miss`, which stops at the first): how many are blocked.
-    pub fn occluded(&self, rays: &[(Ray, f32)]) -> usize {
+    /// `ray_traverse_miss`, which stops at the first hit.
+    fn occluded(&self, rays: &[Segment]) -> usize {
         rays.iter()
             .filter(|(ray, t_max)| {
                 let o = Self::to_obvhs(ray, *t_max);

@@ -6,15 +6,17 @@
 //! wrapper exposes `BVH8_CPU`'s traversal only when compiled with AVX2 (`cfg(target_feature = "avx2")`,
 //! i.e. `RUSTFLAGS="-C target-cpu=native"`; its C++ side is always built with `-march=native`); without
 //! it the bench says so and tries the plain Wald-layout `BVH` (binary, scalar) instead, which fails the
-//! hit-count check on the dragons ([`Tiny::checked`]) and is then left out. tinybvh-rs offers closest hit
+//! hit-count check on the dragons ([`Tiny::usable`]) and is then left out. tinybvh-rs offers closest hit
 //! only: the shadow rays are answered by a closest-hit query limited to the light distance.
 
 use std::time::Instant;
 
 use tinybvh_rs::{Intersection, Intersector, Ray as TRay, bvh};
-use whitted::accel::Accel;
 use whitted::geometry::ray::Ray;
 use whitted::scene::Scene;
+
+use crate::Set;
+use crate::contestant::{Contestant, FirstHit, Segment, Side};
 
 /// The rows' bench id: tinybvh's BVH8_CPU, or its Wald BVH without AVX2.
 pub const ID: &str = if cfg!(target_feature = "avx2") {
@@ -28,9 +30,6 @@ type Layout = tinybvh_rs::bvh8_cpu::BVH;
 /// The Wald BVH keeps a reference to the vertices it was built from (leaked: the bench's lifetime).
 #[cfg(not(target_feature = "avx2"))]
 type Layout = bvh::BVH<'static>;
-
-/// A ray set to check: its name, its segments and our hit count on them.
-pub type Set<'a> = (&'a str, &'a [(Ray, f32)], usize);
 
 /// A tinybvh hierarchy over a scene's triangles (`prim` of a hit = our triangle index).
 pub struct Tiny {
@@ -123,8 +122,55 @@ impl Tiny {
         (slot.ray.hit.t < t_max).then_some(slot.ray.hit.prim)
     }
 
+    /// The Wald BVH's scalar triangle test (without AVX2) rejects |det| < 1e-6 (`MOLLER_TRUMBORE_TEST`
+    /// in `tiny_bvh.h`, with the direction's length in it): below that on 99% of the full dragon's
+    /// triangles, it misses most real hits. Where its hit counts differ from ours on `sets` it is left
+    /// out (`None`), with the reason. BVH8_CPU is checked with every other contestant.
+    pub fn usable(self, sets: &[Set]) -> Option<Self> {
+        if cfg!(target_feature = "avx2") {
+            return Some(self);
+        }
+        for set in sets {
+            let theirs = self.closest(&set.rays);
+            eprintln!("{ID} {}: {theirs} hits, ours {}", set.name, set.hits);
+            if theirs != set.hits {
+                eprintln!(
+                    "{ID}: not measured: its triangle test drops hits on triangles with |e1 x e2| < 1e-6 \
+                     (build with RUSTFLAGS=\"-C target-cpu=native\" for the BVH8_CPU rows)"
+                );
+                return None;
+            }
+        }
+        Some(self)
+    }
+}
+
+// SAFETY: tinybvh's `Intersect` is a `const` member function of classes without `mutable` members
+// (`tiny_bvh.h`, `BVH` and `BVH8_CPU`): traversals only read the hierarchy, so any number of threads may
+// trace it at once, and nothing changes it after `new`.
+unsafe impl Sync for Tiny {}
+
+impl FirstHit for Tiny {
+    fn triangle(&self, (ray, t_max): &Segment) -> Option<u32> {
+        self.hit(ray, *t_max)
+    }
+}
+
+impl Contestant for Tiny {
+    fn id(&self) -> &str {
+        ID
+    }
+
+    fn side(&self) -> Side {
+        Side::Peer
+    }
+
+    fn packets(&self) -> bool {
+        false
+    }
+
     /// Closest hits of segments (`t_max` ∞ for unbounded rays): how many hit.
-    pub fn closest(&self, rays: &[(Ray, f32)]) -> usize {
+    fn closest(&self, rays: &[Segment]) -> usize {
         let mut slot = Slot::new();
         let mut hits = 0;
         for (ray, t_max) in rays {
@@ -135,35 +181,13 @@ impl Tiny {
         hits
     }
 
-    /// Checks the hit counts on each set against ours before any row is measured. BVH8_CPU: every
-    /// difference is reconciled ray by ray (`crate::reconcile`: each disagreement must lie on a
-    /// triangle's edge, or the bench fails). The Wald BVH's scalar triangle test rejects |det| < 1e-6
-    /// (`MOLLER_TRUMBORE_TEST` in `tiny_bvh.h`, with the direction's length in it): below that on 99% of
-    /// the full dragon's triangles, it misses most real hits; where its counts differ it is left out
-    /// (`None`), with the reason.
-    pub fn checked(self, sets: [Set; 3], ours: &Accel, scene: &Scene) -> Option<Self> {
-        for (set, rays, hits) in sets {
-            let theirs = self.closest(rays);
-            eprintln!("{ID} {set}: {theirs} hits, ours {hits}");
-            if theirs == hits {
-                continue;
-            }
-            if cfg!(target_feature = "avx2") {
-                crate::reconcile(
-                    &format!("{ID} {set}"),
-                    rays,
-                    |(r, t)| self.hit(r, *t),
-                    ours,
-                    scene,
-                );
-            } else {
-                eprintln!(
-                    "{ID}: not measured: its triangle test drops hits on triangles with |e1 x e2| < 1e-6 \
-                     (build with RUSTFLAGS=\"-C target-cpu=native\" for the BVH8_CPU rows)"
-                );
-                return None;
-            }
-        }
+    /// tinybvh-rs has no any-hit query: the closest hit within the segment.
+    fn occluded(&self, rays: &[Segment]) -> usize {
+        self.closest(rays)
+    }
+
+    /// Its own Möller–Trumbore test, which may round differently from ours at edges.
+    fn first_hit(&self) -> Option<&dyn FirstHit> {
         Some(self)
     }
 }
