@@ -4,7 +4,7 @@
 //! building or ray generation around it.
 //!
 //! The workload: the 202,520-triangle dragon (`scenes/models/dragon_vrip_res2.ply.gz`) with the
-//! benchmark's camera and light (`shared/bench/dragon-workload.md`) at 320x180, traced by the BVH4 (and
+//! benchmark's camera and light (`docs/dragon-workload.md`) at 320x180, traced by the BVH4 (and
 //! by the BVH8 for the `-bvh8` loops);
 //! the shading loop renders the course's `scenes/dragon.p3f` at 320x180, Whitted, 1 sample per pixel, on
 //! one thread.

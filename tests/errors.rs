@@ -182,6 +182,18 @@ fn degenerate_cameras() {
         4,
         "parallel to the view direction",
     );
+    // A camera whose distance to its target squares past f32::MAX is still a valid view (it was
+    // once refused as "parallel"), and renders: its centre ray points at the target.
+    let far = parse(&CAMERA.replace("from 0 0 5", "from 0 0 2e19")).unwrap();
+    let ray = whitted::render::camera::RayCamera::new(&far.camera, 64, 48).ray(32.0, 24.0);
+    assert_eq!(ray.dir, glam::Vec3::NEG_Z, "{ray:?}");
+    fails(
+        &CAMERA
+            .replace("from 0 0 5", "from 0 0 -3e38")
+            .replace("at 0 0 0", "at 0 0 3e38"),
+        3,
+        "are too far apart: their distance overflows single precision",
+    );
     fails(&CAMERA.replace("angle 45", "angle 180"), 5, "between 0 and 180");
     fails(
         &CAMERA.replace("hither 1\n", ""),

@@ -1,5 +1,5 @@
-//! Property tests of the parsers on mangled input: whatever the bytes, the p3f/NFF and PLY parsers return
-//! a scene or an error that names a place in the file; they never panic, hang or allocate from a count
+//! Property tests of the parsers on mangled input: whatever the bytes, the p3f/NFF, PLY and OBJ parsers
+//! return a scene or an error that names a place in the file; they never panic, hang or allocate from a count
 //! the data does not hold. Inputs are real files with bytes, tokens and lines mutated.
 
 mod common;
@@ -45,6 +45,8 @@ fn edit() -> impl Strategy<Value = Edit> {
         Just("mesh".to_string()),
         Just("f".to_string()),
         Just("v".to_string()),
+        Just("vn".to_string()),
+        Just("1//-1".to_string()),
         Just("\n".to_string()),
         Just("#".to_string()),
         "[ -~]{0,8}",
@@ -78,12 +80,37 @@ fn apply(mut bytes: Vec<u8>, edits: &[Edit]) -> Vec<u8> {
     bytes
 }
 
+/// Nothing but white space and `#` comments (the readers' one tokenizer skips both): the one input
+/// whose error names the whole file rather than a place in it.
+fn blank(bytes: &[u8]) -> bool {
+    bytes.split(|&b| b == b'\n').all(|l| {
+        l.split(|&b| b == b'#')
+            .next()
+            .unwrap()
+            .iter()
+            .all(u8::is_ascii_whitespace)
+    })
+}
+
 fn check_scene(bytes: Vec<u8>) {
+    let lines = bytes.iter().filter(|&&b| b == b'\n').count() as u32 + 1;
+    let blank = blank(&bytes);
     match p3f::parse(Path::new("fuzz.p3f"), Box::new(std::io::Cursor::new(bytes))) {
         Ok(scene) => assert!(scene.camera.validate().is_ok()),
         Err(e) => {
             assert!(!e.message.is_empty());
             assert_eq!(e.path.as_deref(), Some(Path::new("fuzz.p3f")));
+            // A scene error says where: a line of the file and a column on it.
+            match e.location {
+                Location::LineCol(line, col) => {
+                    assert!(
+                        (1..=lines).contains(&line) && col >= 1,
+                        "{e}: outside the file's {lines} lines"
+                    )
+                }
+                Location::File => assert!(blank, "{e}: no line:col, yet the file has tokens"),
+                Location::Byte(_) => panic!("{e}: a byte offset into a text scene"),
+            }
         }
     }
 }
@@ -134,9 +161,34 @@ property float z\nelement face 2\nproperty list uchar uint vertex_indices\nend_h
     out
 }
 
-fn check_ply(bytes: &[u8], gzip: bool) {
+/// A PLY with normals (a zero one, for "none", on vertex 4).
+fn ply_normals() -> Vec<u8> {
+    b"ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\nproperty float z\n\
+property float nx\nproperty float ny\nproperty float nz\nelement face 2\nproperty list uchar int vertex_indices\n\
+end_header\n0 0 0 0 0 1\n1 0 0 0 1 1\n1 1 0 1 0 1\n0 1 0 -1 0 2\n0 0 1 0 0 0\n4 0 1 2 3\n3 0 1 4\n"
+        .to_vec()
+}
+
+/// An OBJ with normals indexed apart from the positions, a flat face and a mixed one.
+fn obj_normals() -> Vec<u8> {
+    b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\nvn 0 1 1\nvn 0 0 0\n\
+f 1//1 2//2 3//1 4//2\nf 1 2 3\nf 1/1/-1 2//1 3\nf -1//-2 -2//-3 -3//-1\n"
+        .to_vec()
+}
+
+fn check_ply(bytes: &[u8], gzip: bool, binary: bool) {
+    check_mesh(bytes, "ply", gzip, binary);
+}
+
+/// A loaded mesh holds only indices in range, finite positions and unit normals (or zero ones, which no
+/// smooth triangle uses); an error names the file.
+fn check_mesh(bytes: &[u8], ext: &str, gzip: bool, binary: bool) {
     let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join(if gzip { "m.ply.gz" } else { "m.ply" });
+    let path = dir.path().join(if gzip {
+        format!("m.{ext}.gz")
+    } else {
+        format!("m.{ext}")
+    });
     let mut file = std::fs::File::create(&path).unwrap();
     if gzip {
         let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
@@ -152,15 +204,29 @@ fn check_ply(bytes: &[u8], gzip: bool) {
                 assert!(t.iter().all(|&i| (i as usize) < mesh.positions.len()));
             }
             assert!(mesh.positions.iter().all(|p| p.is_finite()));
+            let unit = |n: &glam::Vec3| (n.length() - 1.0).abs() < 1e-5;
+            assert!(mesh.normals.iter().all(|n| unit(n) || *n == glam::Vec3::ZERO));
+            let normals = &mesh.normal_triangles;
+            assert!(normals.is_empty() || normals.len() == mesh.triangles.len());
+            for n in normals.iter().flatten().flatten() {
+                assert!((*n as usize) < mesh.normals.len() && unit(&mesh.normals[*n as usize]));
+            }
         }
         Err(e) => {
             assert!(!e.message.is_empty());
             assert!(e.path.is_some());
-            // Errors inside the data say where.
-            assert!(matches!(
-                e.location,
-                Location::LineCol(..) | Location::Byte(_) | Location::File
-            ));
+            // Errors say where: a line and column of the (text) header or of ascii data, a byte
+            // offset into binary data; the whole file only when there is nothing in it, or nothing
+            // of what a mesh needs.
+            match e.location {
+                Location::LineCol(line, col) => assert!(line >= 1 && col >= 1, "{e}"),
+                Location::Byte(_) => assert!(binary, "{e}: a byte offset into an ascii file"),
+                // A conclusion about the whole file (no faces at all) has no place to point at.
+                Location::File => assert!(
+                    blank(bytes) || e.message.ends_with("found none"),
+                    "{e}: no location, yet the file has words"
+                ),
+            }
         }
     }
 }
@@ -170,11 +236,21 @@ proptest! {
 
     #[test]
     fn ply_ascii_survives_mutations(edits in prop::collection::vec(edit(), 1..5), gzip in any::<bool>()) {
-        check_ply(&apply(ply_ascii(), &edits), gzip);
+        check_ply(&apply(ply_ascii(), &edits), gzip, false);
+    }
+
+    #[test]
+    fn ply_normals_survive_mutations(edits in prop::collection::vec(edit(), 1..5), gzip in any::<bool>()) {
+        check_mesh(&apply(ply_normals(), &edits), "ply", gzip, false);
+    }
+
+    #[test]
+    fn obj_normals_survive_mutations(edits in prop::collection::vec(edit(), 1..5), gzip in any::<bool>()) {
+        check_mesh(&apply(obj_normals(), &edits), "obj", gzip, false);
     }
 
     #[test]
     fn ply_binary_survives_mutations(edits in prop::collection::vec(edit(), 1..5), gzip in any::<bool>()) {
-        check_ply(&apply(ply_binary(), &edits), gzip);
+        check_ply(&apply(ply_binary(), &edits), gzip, true);
     }
 }

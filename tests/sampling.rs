@@ -1,4 +1,4 @@
-//! Distribution ray tracing (`src/render/sampler.rs`, `camera.rs`, `shade.rs`, `progressive.rs`):
+//! Distribution ray tracing (`src/render/sampler.rs`, `camera.rs`, `whitted.rs`, `progressive.rs`):
 //! soft shadows against their closed-form visible fraction, depth of field against the pinhole image on
 //! the focal plane and against the circle of confusion off it, reproducibility across threads and
 //! kernels, progressive passes and Ctrl-C from the command line.
@@ -260,8 +260,17 @@ fn progressive_passes_converge() {
     let r = Renderer::new(&scene, &accel, options);
     let mut mean = Progressive::new(1, 1);
     let never = AtomicBool::new(false);
+    // The documented mean, computed here from each pass's own film: the f64 sum of the passes' f32
+    // colours over their count.
+    let mut sum = 0.0f64;
     for pass in 1..=256 {
         mean.render_pass(&r, pass, &|| {}, &never).unwrap();
+        sum += f64::from(r.render_pass(pass, &|| {}, &never).unwrap().0.pixels[0].x);
+        assert_eq!(
+            mean.film().pixels[0].x,
+            (sum / f64::from(pass)) as f32,
+            "the mean of {pass} passes"
+        );
     }
     assert_eq!(mean.passes(), 256);
     let got = mean.film().pixels[0].x;

@@ -166,7 +166,37 @@ fn merge_refuses_bad_parts_by_name() {
     let bytes = std::fs::read(&p[1]).unwrap();
     let cut = path(d, "cut.partial");
     std::fs::write(&cut, &bytes[..bytes.len() - 100]).unwrap();
-    assert_merge_fails(d, &[&p[0], &cut, &p[2]], "cut.partial", "truncated");
+    // 64x48 is 4 x 3 tiles of 16 x 16; part 1/3 holds 4 of them, 1024 pixels: 88 bytes of header, 4
+    // tile indices of 4 bytes, 28 bytes a pixel and an 8-byte checksum make 28,784 bytes.
+    assert_eq!(bytes.len(), 88 + 4 * 4 + 28 * 1024 + 8);
+    assert_merge_fails(
+        d,
+        &[&p[0], &cut, &p[2]],
+        "cut.partial",
+        "truncated: 28684 bytes where its header describes 28784",
+    );
+    // Lengths are compared before anything past the tile list is read: a 64 GiB (sparse) file whose
+    // header describes 28,784 bytes, and a device that never ends, are refused without reading them.
+    let long = path(d, "long.partial");
+    std::fs::write(&long, &bytes).unwrap();
+    std::fs::File::options()
+        .write(true)
+        .open(&long)
+        .unwrap()
+        .set_len(1 << 36)
+        .unwrap();
+    assert_merge_fails(
+        d,
+        &[&p[0], &long, &p[2]],
+        "long.partial",
+        "68719476736 bytes, but its header describes 28784",
+    );
+    assert_merge_fails(
+        d,
+        &[&p[0], "/dev/zero", &p[2]],
+        "/dev/zero",
+        "is not a regular file",
+    );
     let mut flipped = bytes.clone();
     flipped[bytes.len() / 2] ^= 4;
     let flip = path(d, "flip.partial");
@@ -293,15 +323,30 @@ fn scale_out_recipes_run_as_written() {
         std::fs::read(d.join("dragon.png")).unwrap() == single,
         "Slurm recipe"
     );
-    // Rerun: every part is whole, so nothing is rendered again.
+    // Rerun: every part is whole, so none is written again (a rewrite renames a new file into place,
+    // which changes its inode), and the merge gives the same image.
+    let inodes = |d: &Path| {
+        use std::os::unix::fs::MetadataExt;
+        let mut v: Vec<_> = std::fs::read_dir(d.join("parts"))
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                (e.file_name(), e.metadata().unwrap().ino())
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    let before = inodes(d);
+    assert_eq!(before.len(), 32, "the loop writes 32 parts");
     bash(d, &recipe("loop"), &env);
+    assert_eq!(inodes(d), before, "--resume rendered a whole part again");
+    assert!(
+        std::fs::read(d.join("dragon.png")).unwrap() == single,
+        "Slurm recipe, rerun"
+    );
 
-    let has_parallel = Command::new("parallel")
-        .arg("--version")
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !has_parallel {
-        eprintln!("skipped the GNU parallel recipe: `parallel` is not installed");
+    if !common::have("parallel", &[], "apt-get install parallel") {
         return;
     }
     std::fs::remove_dir_all(d.join("parts")).unwrap();

@@ -1,8 +1,8 @@
-//! Render-level closed-form checks of the Whitted integrator (`src/render/shade.rs`).
+//! Render-level closed-form checks of the Whitted integrator (`src/render/whitted.rs`).
 //!
 //! Each test builds a tiny scene in code, renders a pixel (or traces a hand-made ray) through brute force
 //! (`AccelKind::None`), and compares the linear colour with a value worked out by hand from the documented
-//! model (`shared/DESIGN.md`, "Rendering conventions", and the doc comments of `shade.rs` / `optics.rs`):
+//! model (`docs/scene-format.md`, "Rendering conventions", and the doc comments of `whitted.rs` / `optics.rs`):
 //!
 //! - local colour: Σ_lights C_light · (Kd·Cd·max(0, n·L) + Ks·Cs·max(0, n·h)^shine), h = |L + V|, no
 //!   ambient, no falloff, nothing from a light behind the shading normal or in shadow;

@@ -1,5 +1,8 @@
 //! `whitted view`: a clear error without a display; under Xvfb (when `xvfb-run` is installed) a real
 //! window whose scripted frames give `render --passes`'s image.
+#![cfg(feature = "view")]
+
+mod common;
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -61,15 +64,9 @@ fn screenshot_needs_frames() {
     assert_eq!(out.status.code(), Some(2), "a usage error");
 }
 
-/// True if `xvfb-run` can be started.
-fn have_xvfb() -> bool {
-    Command::new("xvfb-run").arg("--help").output().is_ok()
-}
-
 #[test]
 fn under_xvfb_the_scripted_frames_are_render_passes() {
-    if !have_xvfb() {
-        eprintln!("skipped: xvfb-run is not installed (apt-get install xvfb to run this test)");
+    if !common::have("xvfb-run", &["--help"], "apt-get install xvfb") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

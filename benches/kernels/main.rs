@@ -1,4 +1,4 @@
-//! Kernel throughput on the dragon workload (`shared/bench/dragon-workload.md`), in Mrays/s through
+//! Kernel throughput on the dragon workload (`docs/dragon-workload.md`), in Mrays/s through
 //! criterion's throughput: one loop over the contestants × the ray sets × one thread and all of them.
 //! The contestants: every structure of the test kit (`whitted::kit::contestants`) with its single-ray
 //! kernel, the wide BVHs with their packet kernel too (8 consecutive rays a packet), and obvhs 0.4's

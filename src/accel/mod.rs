@@ -15,7 +15,7 @@ pub mod wide;
 
 use std::str::FromStr;
 
-pub use packet::PACKET;
+pub use packet::{HitPacket, PACKET, RayPacket};
 pub use prims::{Hit, PrimKind, Prims, Surface};
 pub use wide::Simd;
 
@@ -190,13 +190,7 @@ impl<'a> Accel<'a> {
     /// the packet together (for coherent rays: camera rays of neighbouring pixels, say); the other
     /// structures answer ray by ray.
     #[inline]
-    pub fn intersect_packet(
-        &self,
-        rays: &[Ray; PACKET],
-        active: u8,
-        t_min: f32,
-        hits: &mut [Hit; PACKET],
-    ) -> u8 {
+    pub fn intersect_packet(&self, rays: &RayPacket, active: u8, t_min: f32, hits: &mut HitPacket) -> u8 {
         match self {
             Accel::Bvh4(b) => b.traverse_packet::<Closest>(rays, active, t_min, hits),
             Accel::Bvh8(b) => b.traverse_packet::<Closest>(rays, active, t_min, hits),
@@ -207,7 +201,7 @@ impl<'a> Accel<'a> {
     /// The mask of the rays of `rays` in `active` that hit anything with `t` in `(t_min, t_max[k])`:
     /// [`Accel::occluded`] for each, as a packet where the structure has a packet kernel.
     #[inline]
-    pub fn occluded_packet(&self, rays: &[Ray; PACKET], active: u8, t_min: f32, t_max: &[f32; PACKET]) -> u8 {
+    pub fn occluded_packet(&self, rays: &RayPacket, active: u8, t_min: f32, t_max: &[f32; PACKET]) -> u8 {
         let mut hits = t_max.map(Hit::miss);
         match self {
             Accel::Bvh4(b) => b.traverse_packet::<AnyHit>(rays, active, t_min, &mut hits),

@@ -3,8 +3,17 @@
 //! (bit `k` for ray `k`); every accelerator answers it, the wide BVHs with their packet kernel and the
 //! others ray by ray, with the answers each ray would get alone.
 
+use super::prims::Hit;
+use crate::geometry::ray::Ray;
+
 /// Rays per packet: the eight lanes of one AVX2 register (two SSE registers elsewhere).
 pub const PACKET: usize = 8;
+
+/// A packet's rays (ray `k` is lane `k`).
+pub type RayPacket = [Ray; PACKET];
+
+/// A packet's hits: each ray's search limit on the way in (`t`), its closest hit on the way out.
+pub type HitPacket = [Hit; PACKET];
 
 /// The rays of a packet's mask, by index, the first ray first.
 #[inline(always)]

@@ -1,21 +1,27 @@
 //! `whitted bench`: frames per second of a scene (by default the course's dragon scene), with the
-//! rays each frame traces, by kind.
+//! report `render --stats` prints (rays by kind, Mrays/s, times, structure, threads) and each frame's
+//! time.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use clap::Args;
+use serde_json::Value;
 use whitted::accel::{Accel, Prims};
-use whitted::render::RayCounts;
 use whitted::render::{Options, Renderer};
+use whitted::scene::Scene;
 
-use super::render::{FrameArgs, load_scene, resolution, thread_pool};
+use super::args::{
+    CameraArgs, DEFAULT_DEPTH, FrameArgs, load_scene, resolution, spd_frame, spd_refuses, thread_pool,
+};
+use super::report::Report;
 
 /// Arguments of `whitted bench`.
 #[derive(Args)]
 pub struct BenchArgs {
-    /// The scene (default: the course's `scenes/dragon.p3f`, 100k triangles, 800x600, 1 spp).
+    /// The scene (default: the course's `scenes/dragon.p3f`, 100k triangles, 800x600, 1 spp, looked
+    /// for in the source tree the binary was built from, then under the current directory).
     scene: Option<PathBuf>,
     /// Frames timed (after one frame of warm-up).
     #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
@@ -25,119 +31,169 @@ pub struct BenchArgs {
     /// Samples per pixel (default: the file's).
     #[arg(long)]
     spp: Option<u32>,
+    /// Most bounces after the primary hit (default 6).
+    #[arg(long)]
+    max_depth: Option<u32>,
+    /// Time frames of the SPD test procedure (513x513 corner rays, spp 0, 4 bounces) and compare their
+    /// counts with the SPD Readme's (refuses --spp, --width, --height and --max-depth).
+    #[arg(long)]
+    spd: bool,
+    #[command(flatten)]
+    camera: CameraArgs,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
 }
 
-/// The dragon scene: `scenes/dragon.p3f` under the current directory, else in the source tree the
-/// binary was built from.
-fn default_scene() -> PathBuf {
-    let here = PathBuf::from("scenes/dragon.p3f");
-    if here.is_file() {
-        here
-    } else {
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/dragon.p3f")
+/// The benchmark scene, relative to a source tree or to the current directory.
+const DRAGON: &str = "scenes/dragon.p3f";
+
+/// The first of `candidates` that is a file, or an error that names them all and says how to pass a
+/// scene.
+fn find_scene(candidates: &[PathBuf]) -> whitted::Result<PathBuf> {
+    if let Some(found) = candidates.iter().find(|p| p.is_file()) {
+        return Ok(found.clone());
     }
+    let tried: Vec<String> = candidates.iter().map(|p| p.display().to_string()).collect();
+    Err(whitted::Error::msg(format!(
+        "no scene given, and the default benchmark scene is not at {}; pass one: whitted bench SCENE",
+        tried.join(" nor at ")
+    )))
+}
+
+/// The dragon scene: in the source tree this binary was built from while that tree exists (a
+/// `cargo install`ed binary outlives its build directory), else under the current directory.
+fn default_scene() -> whitted::Result<PathBuf> {
+    let sources = Path::new(env!("CARGO_MANIFEST_DIR")).join(DRAGON);
+    find_scene(&[sources, PathBuf::from(DRAGON)])
+}
+
+/// The frames' options: the scene's with the arguments', or the SPD procedure's.
+fn options(args: &BenchArgs, scene: &Scene) -> whitted::Result<Options> {
+    spd_refuses(
+        args.spd,
+        &[
+            ("--spp", args.spp.is_some()),
+            ("--width", args.frame.width.is_some()),
+            ("--height", args.frame.height.is_some()),
+            ("--max-depth", args.max_depth.is_some()),
+        ],
+    )?;
+    let (width, height) = resolution(scene, args.frame.width, args.frame.height);
+    let options = Options {
+        width,
+        height,
+        max_depth: args.max_depth.unwrap_or(DEFAULT_DEPTH),
+        kernel: args.frame.kernel,
+        spp: args.spp.unwrap_or(scene.spp),
+        ..Options::new(scene)
+    };
+    let options = spd_frame(args.spd, options, scene);
+    options.validate()?;
+    Ok(options)
 }
 
 /// Renders the frames and prints their timing.
 pub fn run(args: &BenchArgs) -> whitted::Result<()> {
-    let path = args.scene.clone().unwrap_or_else(default_scene);
-    let scene = load_scene(Some(&path))?;
-    let (width, height) = resolution(&scene, args.frame.width, args.frame.height)?;
-    let pool = thread_pool(args.frame.threads)?;
-    let accel = pool.install(|| Accel::build(Prims::new(&scene), args.frame.accel));
-    let options = Options {
-        width,
-        height,
-        kernel: args.frame.kernel,
-        spp: args.spp.unwrap_or(scene.spp),
-        ..Options::new(&scene)
+    let path = match &args.scene {
+        Some(path) => path.clone(),
+        None => default_scene()?,
     };
+    let start = Instant::now();
+    let mut scene = load_scene(Some(&path))?;
+    args.camera.apply(&mut scene.camera)?;
+    let loaded = start.elapsed();
+    let options = options(args, &scene)?;
+    let pool = thread_pool(args.frame.threads)?;
+    let start = Instant::now();
+    let accel = pool.install(|| Accel::build(Prims::new(&scene), args.frame.accel));
+    let built = start.elapsed();
     let renderer = Renderer::new(&scene, &accel, options);
     let never = AtomicBool::new(false);
     // Every frame is pass 1: the same rays, so the frames time the same work.
     let frame = || pool.install(|| renderer.render_pass(1, &|| {}, &never).expect("never stopped"));
     let (_, rays) = frame();
-    let mut ms: Vec<f64> = (0..args.frames)
+    let ms: Vec<f64> = (0..args.frames)
         .map(|_| {
             let start = Instant::now();
             frame();
             start.elapsed().as_secs_f64() * 1e3
         })
         .collect();
+    let (median, min, max) = spread(&ms);
+    let times = [loaded, built, Duration::from_secs_f64(median / 1e3)];
+    let threads = pool.current_num_threads();
+    let report = Report {
+        per_frame: true,
+        ..Report::new(Some(&path), &options, &accel, threads, times, rays)
+    };
+    if args.json {
+        println!("{}", json(&report, &ms));
+    } else {
+        let fps = 1e3 / median;
+        println!("frames     {} timed after one of warm-up", ms.len());
+        println!("frame      median {median:.1} ms (min {min:.1}, max {max:.1}), {fps:.2} fps");
+        print!("{}", report.text());
+    }
+    Ok(())
+}
+
+/// The median, least and most of the frame times `ms` (at least one).
+fn spread(ms: &[f64]) -> (f64, f64, f64) {
+    let mut ms = ms.to_vec();
     ms.sort_by(f64::total_cmp);
     let median = if ms.len() % 2 == 1 {
         ms[ms.len() / 2]
     } else {
         (ms[ms.len() / 2 - 1] + ms[ms.len() / 2]) / 2.0
     };
-    let (min, max) = (ms[0], ms[ms.len() - 1]);
-    let fps = 1e3 / median;
-    let mrays = rays.total() as f64 / median / 1e3;
-    let threads = pool.current_num_threads();
-    if args.json {
-        println!(
-            "{}",
-            json(
-                &path, width, height, args, median, min, max, fps, &rays, mrays, threads
-            )
-        );
-    } else {
-        println!(
-            "{}: {width}x{height}, {} frames on {threads} threads ({:?}, {:?} kernel)",
-            path.display(),
-            args.frames,
-            args.frame.accel,
-            args.frame.kernel
-        );
-        println!("frame: median {median:.1} ms (min {min:.1}, max {max:.1}), {fps:.2} fps");
-        println!(
-            "rays per frame: {} primary, {} shadow, {} reflected, {} refracted, {} in all; {mrays:.2} Mrays/s",
-            rays.primary,
-            rays.shadow,
-            rays.reflected,
-            rays.refracted,
-            rays.total()
-        );
-    }
-    Ok(())
+    (median, ms[0], ms[ms.len() - 1])
 }
 
-/// The `--json` object.
-#[allow(clippy::too_many_arguments)]
-fn json(
-    path: &std::path::Path,
-    width: u32,
-    height: u32,
-    args: &BenchArgs,
-    median: f64,
-    min: f64,
-    max: f64,
-    fps: f64,
-    rays: &RayCounts,
-    mrays: f64,
-    threads: usize,
-) -> String {
-    let scene = path
-        .display()
-        .to_string()
-        .replace('\\', "\\\\")
-        .replace('"', "\\\"");
-    format!(
-        "{{\"scene\": \"{scene}\", \"width\": {width}, \"height\": {height}, \"frames\": {}, \
-         \"fps_median\": {fps:.3}, \"frame_ms_median\": {median:.3}, \"frame_ms_min\": {min:.3}, \
-         \"frame_ms_max\": {max:.3}, \"rays_per_frame\": {{\"primary\": {}, \"shadow\": {}, \
-         \"reflected\": {}, \"refracted\": {}, \"total\": {}}}, \"mrays_per_s\": {mrays:.3}, \
-         \"threads\": {threads}, \"accel\": \"{}\", \"kernel\": \"{}\"}}",
-        args.frames,
-        rays.primary,
-        rays.shadow,
-        rays.reflected,
-        rays.refracted,
-        rays.total(),
-        format!("{:?}", args.frame.accel).to_lowercase(),
-        format!("{:?}", args.frame.kernel).to_lowercase(),
-    )
+/// The `--json` object: the frames' times, then the report's figures.
+fn json(report: &Report, ms: &[f64]) -> Value {
+    let (median, min, max) = spread(ms);
+    let mut out = serde_json::Map::new();
+    out.insert("frames".into(), ms.len().into());
+    out.insert("frame_ms".into(), ms.into());
+    out.insert("frame_ms_median".into(), median.into());
+    out.insert("frame_ms_min".into(), min.into());
+    out.insert("frame_ms_max".into(), max.into());
+    out.insert("fps_median".into(), (1e3 / median).into());
+    out.extend(report.json());
+    Value::Object(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_median_of_an_odd_count_is_the_middle_and_of_an_even_count_the_mean_of_two() {
+        assert_eq!(spread(&[3.0, 1.0, 2.0]), (2.0, 1.0, 3.0));
+        assert_eq!(spread(&[4.0, 1.0, 2.0, 8.0]), (3.0, 1.0, 8.0));
+        assert_eq!(spread(&[5.0]), (5.0, 5.0, 5.0));
+    }
+
+    #[test]
+    fn the_default_scene_is_the_first_file_found_or_an_error_naming_where_it_looked() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b) = (dir.path().join("a.p3f"), dir.path().join("b.p3f"));
+        let error = find_scene(&[a.clone(), b.clone()]).unwrap_err().to_string();
+        let expected = format!(
+            "no scene given, and the default benchmark scene is not at {} nor at {}; pass one: \
+             whitted bench SCENE",
+            a.display(),
+            b.display()
+        );
+        assert_eq!(error, expected);
+        std::fs::write(&b, "").unwrap();
+        assert_eq!(find_scene(&[a.clone(), b.clone()]).unwrap(), b);
+        std::fs::write(&a, "").unwrap();
+        assert_eq!(find_scene(&[a.clone(), b]).unwrap(), a);
+        // A directory of that name is not the scene.
+        let c = dir.path().join("c.p3f");
+        std::fs::create_dir(&c).unwrap();
+        assert!(find_scene(&[c]).is_err());
+    }
 }

@@ -1,13 +1,18 @@
-//! `whitted info`: what a scene holds.
+//! `whitted info`: what a scene holds, as text or as one JSON object with the same fields.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::Args;
+use glam::Vec3;
+use serde_json::{Map, Value, json};
+use whitted::accel::bvh2::Stats;
 use whitted::accel::{Accel, AccelKind, Prims};
+use whitted::render::spd::{self, Counts};
 use whitted::scene::{self, Scene};
 
-use super::{BuildKind, build_options};
+use super::args::{BuildKind, build_options};
+use super::report::{accel_name, image_size, simd_name};
 
 /// Arguments of `whitted info`.
 #[derive(Args)]
@@ -26,6 +31,10 @@ pub struct InfoArgs {
     /// SAH bins per axis (2 to 64).
     #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(2..=64))]
     bins: u32,
+    /// Also print the frame `render --spd` would render (the SPD test procedure's) and the SPD Readme's
+    /// ray counts for the scene's file name. Nothing is rendered: `render --spd --stats` counts ours.
+    #[arg(long)]
+    spd: bool,
 }
 
 /// Loads the scene and prints its summary.
@@ -40,27 +49,34 @@ pub fn run(args: &InfoArgs) -> whitted::Result<()> {
         let start = Instant::now();
         let options = build_options(args.build, args.bins as usize);
         let accel = Accel::build_with(Prims::new(&scene), kind, options);
-        (start.elapsed().as_secs_f64(), accel.describe())
+        (start.elapsed().as_secs_f64(), accel)
     });
+    let readme = args.spd.then(|| readme(&args.scene));
     if args.json {
-        let mut out = json(&scene, load_s);
-        if let Some((build_s, _)) = &built {
-            out.pop();
-            out += &format!(", \"build_s\": {build_s:.6}}}");
+        let mut out = json(&args.scene, &scene, load_s);
+        if let Some((build_s, accel)) = &built {
+            out.insert("build_s".into(), (*build_s).into());
+            out.insert("accel".into(), accel_json(accel));
         }
-        println!("{out}");
+        if let Some(readme) = readme {
+            out.insert("spd".into(), spd_json(&scene, readme.as_ref()));
+        }
+        println!("{}", Value::Object(out));
     } else {
         print!("{}", text(&args.scene, &scene, load_s));
-        if let Some((build_s, description)) = built {
-            println!("accelerator   {description}");
+        if let Some((build_s, accel)) = built {
+            println!("accelerator   {}", accel.describe());
             println!("build time    {build_s:.3} s");
+        }
+        if let Some(readme) = readme {
+            print!("{}", spd_text(&scene, readme.as_ref()));
         }
     }
     Ok(())
 }
 
-fn counts(scene: &Scene) -> [(&'static str, usize); 10] {
-    let c = &scene.camera;
+/// The counts printed first, as (JSON key, value).
+fn counts(scene: &Scene) -> [(&'static str, usize); 8] {
     [
         ("spheres", scene.spheres.radius.len()),
         ("triangles", scene.triangles.len()),
@@ -70,44 +86,139 @@ fn counts(scene: &Scene) -> [(&'static str, usize); 10] {
         ("point_lights", scene.point_lights.len()),
         ("area_lights", scene.area_lights.len()),
         ("materials", scene.materials.len()),
-        ("width", c.width as usize),
-        ("height", c.height as usize),
     ]
 }
 
-fn vec3(v: glam::Vec3) -> String {
+/// A float as JSON: its shortest decimal form (the one `{}` prints, which reads back as the same
+/// `f32`), or null if it is not finite (JSON has no infinity).
+fn number(v: f32) -> Value {
+    v.to_string().parse::<f64>().map_or(Value::Null, Value::from)
+}
+
+fn vec3_json(v: Vec3) -> Value {
+    Value::Array(v.to_array().map(number).to_vec())
+}
+
+fn vec3(v: Vec3) -> String {
     format!("[{}, {}, {}]", v.x, v.y, v.z)
 }
 
-/// One JSON object: the counts, then the camera, bounds and timings. Every value is a number or an array
-/// of numbers, so no string escaping is needed.
-fn json(scene: &Scene, load_s: f64) -> String {
-    let mut fields: Vec<String> = counts(scene)
-        .iter()
-        .map(|(k, v)| format!("\"{k}\": {v}"))
-        .collect();
-    let c = &scene.camera;
-    fields.push(format!(
-        "\"degenerate_triangles\": {}",
-        scene.degenerate_triangles()
-    ));
-    fields.push(format!("\"spp\": {}", scene.spp));
-    fields.push(format!("\"fov_y\": {}", c.fov_y));
-    fields.push(format!("\"from\": {}", vec3(c.from)));
-    fields.push(format!("\"at\": {}", vec3(c.at)));
-    fields.push(format!("\"up\": {}", vec3(c.up)));
-    let b = scene.bounds();
-    if !b.is_empty() {
-        fields.push(format!("\"bounds_min\": {}", vec3(b.min)));
-        fields.push(format!("\"bounds_max\": {}", vec3(b.max)));
+/// One JSON object with the text's fields, in its order. Bounds are null for a scene with nothing
+/// bounded, and any number that is not finite (a bound that overflowed) is null.
+fn json(path: &Path, scene: &Scene, load_s: f64) -> Map<String, Value> {
+    let mut out = Map::new();
+    out.insert("scene".into(), path.display().to_string().into());
+    for (k, v) in counts(scene) {
+        out.insert(k.into(), v.into());
     }
-    fields.push(format!("\"load_s\": {load_s:.6}"));
-    format!("{{{}}}", fields.join(", "))
+    let c = &scene.camera;
+    let b = scene.bounds();
+    let bound = |v| if b.is_empty() { Value::Null } else { vec3_json(v) };
+    let rest = json!({
+        "degenerate_triangles": scene.degenerate_triangles(),
+        "width": c.width,
+        "height": c.height,
+        "from": vec3_json(c.from),
+        "at": vec3_json(c.at),
+        "up": vec3_json(c.up),
+        "fov_y": number(c.fov_y),
+        "aperture": number(c.aperture),
+        "focal": number(c.focal),
+        "spp": scene.spp,
+        "bounds_min": bound(b.min),
+        "bounds_max": bound(b.max),
+        "load_s": load_s,
+    });
+    if let Value::Object(rest) = rest {
+        out.extend(rest);
+    }
+    out
 }
 
-fn text(path: &std::path::Path, scene: &Scene, load_s: f64) -> String {
+/// The built structure: its kind and instruction set, and its shape (the BVHs' nodes, leaves, depth,
+/// leaf sizes and SAH cost; the grid's cells and references).
+fn accel_json(accel: &Accel) -> Value {
+    let mut out = Map::new();
+    out.insert("kind".into(), accel_name(accel).into());
+    out.insert("simd".into(), simd_name(accel).into());
+    let shape = match accel {
+        Accel::Brute(_) => json!({}),
+        Accel::Grid(g) => {
+            let s = g.stats();
+            json!({
+                "resolution": s.resolution,
+                "cells": s.cells,
+                "empty_cells": s.empty_cells,
+                "references": s.references,
+                "loose": s.loose,
+            })
+        }
+        Accel::Bvh2(b) => tree_json(&b.stats()),
+        Accel::Bvh4(b) => tree_json(&b.stats()),
+        Accel::Bvh8(b) => tree_json(&b.stats()),
+    };
+    if let Value::Object(shape) = shape {
+        out.extend(shape);
+    }
+    Value::Object(out)
+}
+
+/// A hierarchy's shape: `leaf_sizes[k]` counts the leaves of k primitives, the last those of 16 or more.
+fn tree_json(s: &Stats) -> Value {
+    json!({
+        "nodes": s.nodes,
+        "leaves": s.leaves,
+        "depth": s.depth,
+        "leaf_sizes": s.histogram,
+        "sah_cost": s.sah,
+    })
+}
+
+/// The Readme's counts for the scene's file name, if it names one of its databases.
+fn readme(path: &Path) -> Option<Counts> {
+    spd::readme_counts(&path.file_name().unwrap_or_default().to_string_lossy())
+}
+
+/// The SPD frame and the Readme's counts, as `info --json`'s `spd` object.
+fn spd_json(scene: &Scene, readme: Option<&Counts>) -> Value {
+    let options = spd::options(scene);
+    let (w, h) = image_size(&options);
+    json!({
+        "width": w,
+        "height": h,
+        "corner_rays": u64::from(options.width) * u64::from(options.height),
+        "spp": options.spp,
+        "max_depth": options.max_depth,
+        "readme": readme.map(|c| json!({
+            "eye_hits": c.eye_hits,
+            "reflected": c.reflected,
+            "refracted": c.refracted,
+            "shadow": c.shadow,
+        })),
+    })
+}
+
+/// The SPD frame and the Readme's counts, as lines.
+fn spd_text(scene: &Scene, readme: Option<&Counts>) -> String {
+    let options = spd::options(scene);
+    let (w, h) = image_size(&options);
+    let mut out = format!(
+        "spd           {w}x{h} pixels from {}x{} corner rays, spp {}, {} bounces\n",
+        options.width, options.height, options.spp, options.max_depth
+    );
+    out += &match readme {
+        Some(c) => format!(
+            "spd readme    eye hits {}, reflected {}, refracted {}, shadow {} (at the default size)\n",
+            c.eye_hits, c.reflected, c.refracted, c.shadow
+        ),
+        None => "spd readme    (no row for this file name)\n".to_string(),
+    };
+    out
+}
+
+fn text(path: &Path, scene: &Scene, load_s: f64) -> String {
     let mut out = format!("scene         {}\n", path.display());
-    for (k, v) in counts(scene).iter().take(8) {
+    for (k, v) in counts(scene) {
         out += &format!("{:<13} {v}\n", k.replace('_', " "));
     }
     let degenerate = scene.degenerate_triangles();

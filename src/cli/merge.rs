@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use whitted::render::partial;
+use whitted::parts;
 
 /// Arguments of `whitted merge`.
 #[derive(Args)]
@@ -24,7 +24,7 @@ pub struct MergeArgs {
 
 /// Checks and merges the parts, then writes the image (nothing is written if any check fails).
 pub fn run(args: &MergeArgs) -> whitted::Result<()> {
-    let film = partial::merge(&args.parts)?;
+    let film = parts::merge::merge(&args.parts)?;
     film.write(&args.output, args.srgb)?;
     if !args.quiet {
         eprintln!(

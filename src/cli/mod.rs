@@ -1,10 +1,14 @@
 //! Command-line interface: parses arguments with clap and calls the library. Every failure is one line on
 //! stderr, `whitted: path:line:col: message`, and exit status 1; clap's usage errors exit with 2.
 
+mod args;
 mod bench;
 mod info;
 mod merge;
+mod plan;
 mod render;
+mod report;
+#[cfg(feature = "view")]
 mod view;
 
 use std::process::ExitCode;
@@ -32,25 +36,8 @@ enum Command {
     Merge(merge::MergeArgs),
     /// Open a window on a scene (the built-in default scene if none is given), rendered as the camera
     /// moves and refined while it stands still (`whitted view --help` lists the keys).
+    #[cfg(feature = "view")]
     View(view::ViewArgs),
-}
-
-/// The BVH2 builder, as a command-line value.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum BuildKind {
-    /// Binned surface area heuristic.
-    Sah,
-    /// Centroid midpoint of the longest axis.
-    Midpoint,
-}
-
-/// The library's build options from the command line's.
-pub fn build_options(build: BuildKind, bins: usize) -> whitted::accel::BuildOptions {
-    let builder = match build {
-        BuildKind::Sah => whitted::accel::bvh2::Builder::Sah { bins },
-        BuildKind::Midpoint => whitted::accel::bvh2::Builder::Midpoint,
-    };
-    whitted::accel::BuildOptions { builder, bins }
 }
 
 /// Runs the command line and turns errors into a message and an exit status.
@@ -61,6 +48,7 @@ pub fn main() -> ExitCode {
         Command::Render(args) => render::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Merge(args) => merge::run(&args),
+        #[cfg(feature = "view")]
         Command::View(args) => view::run(&args),
     };
     match result {

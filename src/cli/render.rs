@@ -1,411 +1,262 @@
-//! `whitted render`: a scene to an image.
+//! `whitted render`: a scene to an image, or to a `.partial` file of part of one.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use whitted::accel::{Accel, AccelKind, Prims};
-use whitted::render::partial::{Part, Settings};
+use whitted::accel::{Accel, Prims};
+use whitted::parts::partial::Part;
+use whitted::render::Renderer;
 use whitted::render::progressive::Progressive;
-use whitted::render::{Kernel, Options, Renderer, tiles};
-use whitted::scene::{self, Scene, check_resolution};
 
-use super::{BuildKind, build_options};
-
-/// The scene `render` draws when given none, compiled into the binary so the first command works anywhere.
-const DEFAULT_SCENE: &str = include_str!("../../scenes/default.p3f");
+use super::args::{
+    BuildKind, CameraArgs, FrameArgs, image, load_scene, non_negative, part_of, pass_range, positive,
+    thread_pool,
+};
+use super::plan::{Plan, Target};
+use super::report::{self, Report, ReportArgs};
 
 /// Arguments of `whitted render`.
 #[derive(Args)]
 pub struct RenderArgs {
     /// The scene (.p3f, .nff, .ply, .obj, optionally .gz); the built-in default scene if omitted.
-    scene: Option<PathBuf>,
+    pub scene: Option<PathBuf>,
     /// Output image: .png, .ppm (8-bit) or .exr (linear float); or a .partial file (see --tiles).
     #[arg(short, long, default_value = "render.png")]
-    output: PathBuf,
+    pub output: PathBuf,
     /// Render only part K of N of the image (K from 0; a fixed split of its tiles, balanced by area)
     /// into a .partial file, for `whitted merge` to combine with the other parts.
     #[arg(long, value_name = "K/N", value_parser = part_of)]
-    tiles: Option<(u32, u32)>,
+    pub tiles: Option<(u32, u32)>,
     /// Render only passes A to B-1 (from 0) of the --passes of a progressive render, into a .partial
     /// file, for `whitted merge`.
     #[arg(long, value_name = "A..B", value_parser = pass_range)]
-    passes_range: Option<(u32, u32)>,
+    pub passes_range: Option<(u32, u32)>,
     /// Write the sums of the passes as a .partial file (implied by an output name ending in .partial).
     #[arg(long)]
-    partial: bool,
+    pub partial: bool,
     /// With a .partial output: if the file is already there, whole, and holds exactly this part of this
     /// render, do nothing (rerun a job array with --resume to redo only the missing or damaged parts).
     #[arg(long)]
-    resume: bool,
+    pub resume: bool,
     #[command(flatten)]
-    frame: FrameArgs,
-    /// Most bounces after the primary hit.
-    #[arg(long, default_value_t = 6)]
-    max_depth: u32,
+    pub frame: FrameArgs,
+    /// Most bounces after the primary hit (default 6).
+    #[arg(long)]
+    pub max_depth: Option<u32>,
     /// The BVH2 builder when `--accel bvh2`: sah or midpoint.
     #[arg(long, default_value = "sah")]
-    build: BuildKind,
+    pub build: BuildKind,
     /// SAH bins per axis (2 to 64).
     #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(2..=64))]
-    bins: u32,
+    pub bins: u32,
     /// Samples per pixel (overrides the file's `spp`): 0 for one ray through each pixel centre, else
     /// n x n jittered samples (rounded up to a square).
     #[arg(long)]
-    spp: Option<u32>,
+    pub spp: Option<u32>,
     /// Seed of every random number (the same seed gives the same image, on any number of threads).
     #[arg(long, default_value_t = 0)]
-    seed: u64,
+    pub seed: u64,
     /// Lens aperture in pixels of the view plane (overrides the file's; 0 = pinhole).
     #[arg(long, value_parser = non_negative)]
-    aperture: Option<f32>,
+    pub aperture: Option<f32>,
     /// Focal distance as a ratio of the view-plane distance (overrides the file's).
     #[arg(long, value_parser = positive)]
-    focal: Option<f32>,
+    pub focal: Option<f32>,
     /// Roughness of materials whose `f` line gives none (0 = perfect mirrors; the course used 0.3).
     #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
-    roughness: f32,
+    pub roughness: f32,
     /// Progressive rendering: this many passes of one jittered sample per pixel, averaged.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
-    passes: u32,
+    pub passes: u32,
     /// With --passes: write the image every K passes, so the render can be watched converging.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
-    every: Option<u32>,
+    pub every: Option<u32>,
     /// With --passes: also keep each written snapshot in this directory, numbered by pass.
     #[arg(long)]
-    progressive_out: Option<PathBuf>,
+    pub progressive_out: Option<PathBuf>,
     /// Encode the output with the sRGB curve (default: linear values, the course's convention).
     #[arg(long)]
-    srgb: bool,
+    pub srgb: bool,
     /// No progress bar or summary.
     #[arg(short, long)]
-    quiet: bool,
-}
-
-fn number(s: &str) -> Result<f32, String> {
-    let v: f32 = s
-        .parse()
-        .map_err(|_| format!("expected a number, found \"{s}\""))?;
-    if v.is_finite() {
-        Ok(v)
-    } else {
-        Err(format!("expected a finite number, found {s}"))
-    }
-}
-
-fn non_negative(s: &str) -> Result<f32, String> {
-    let v = number(s)?;
-    if v >= 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("expected a number of at least 0, found {s}"))
-    }
-}
-
-fn positive(s: &str) -> Result<f32, String> {
-    let v = number(s)?;
-    if v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("expected a number above 0, found {s}"))
-    }
-}
-
-/// Two numbers `a` and `b` written `a{sep}b`; `expected` says what the whole should look like.
-fn u32_pair(s: &str, sep: &str, expected: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("expected {expected}; found \"{s}\"");
-    let (a, b) = s.split_once(sep).ok_or_else(bad)?;
-    Ok((
-        a.trim().parse().map_err(|_| bad())?,
-        b.trim().parse().map_err(|_| bad())?,
-    ))
-}
-
-/// `K/N` with K < N.
-fn part_of(s: &str) -> Result<(u32, u32), String> {
-    let (k, n) = u32_pair(s, "/", "K/N, part K (from 0) of N parts, such as 3/8")?;
-    if n == 0 || k >= n {
-        return Err(format!("part {k}/{n} does not exist: K counts from 0 to N-1"));
-    }
-    Ok((k, n))
-}
-
-/// `A..B` with A < B.
-fn pass_range(s: &str) -> Result<(u32, u32), String> {
-    let (a, b) = u32_pair(s, "..", "A..B, passes A to B-1 (from 0), such as 0..16")?;
-    if a >= b {
-        return Err(format!("the pass range {a}..{b} is empty"));
-    }
-    Ok((a, b))
+    pub quiet: bool,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+    #[command(flatten)]
+    pub report: ReportArgs,
 }
 
 /// Set by Ctrl-C: the render stops at the next tile and keeps the last complete pass.
 static STOP: AtomicBool = AtomicBool::new(false);
 
-/// The frame's size, the threads and the structure and kernel that trace it (`render` and `bench`).
-#[derive(Args)]
-pub struct FrameArgs {
-    /// Image width (keeps the vertical field of view; the height follows the aspect ratio if not given).
-    #[arg(long)]
-    pub width: Option<u32>,
-    /// Image height.
-    #[arg(long)]
-    pub height: Option<u32>,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
-    pub threads: Option<usize>,
-    /// Acceleration structure: none, grid, bvh2, bvh4, bvh8 (8-wide nodes, AVX2 where the CPU has it)
-    /// or auto (bvh8 on CPUs with AVX2, else bvh4).
-    #[arg(long, default_value = "auto")]
-    pub accel: AccelKind,
-    /// Camera rays one at a time (single) or in packets of 8 (packet, BVH4 and BVH8; same image).
-    #[arg(long, default_value = "packet")]
-    pub kernel: Kernel,
-}
-
-/// Loads the named scene, or the built-in one.
-pub fn load_scene(path: Option<&Path>) -> whitted::Result<Scene> {
-    match path {
-        Some(p) => scene::load(p),
-        None => scene::p3f::parse(Path::new("(default scene)"), Box::new(DEFAULT_SCENE.as_bytes())),
-    }
-}
-
-/// The resolution after `--width`/`--height`: one given alone keeps the file's aspect ratio.
-pub fn resolution(scene: &Scene, width: Option<u32>, height: Option<u32>) -> whitted::Result<(u32, u32)> {
-    let (fw, fh) = (scene.camera.width as u64, scene.camera.height as u64);
-    let (w, h) = match (width, height) {
-        (Some(w), Some(h)) => (w, h),
-        (Some(w), None) => (w, ((w as u64 * fh).div_ceil(fw)).min(u32::MAX as u64) as u32),
-        (None, Some(h)) => (((h as u64 * fw).div_ceil(fh)).min(u32::MAX as u64) as u32, h),
-        (None, None) => (fw as u32, fh as u32),
-    };
-    check_resolution(w, h).map_err(whitted::Error::msg)?;
-    Ok((w, h))
-}
-
-/// A rayon pool of `threads` workers (all cores when `None`).
-pub fn thread_pool(threads: Option<usize>) -> whitted::Result<rayon::ThreadPool> {
-    if threads == Some(0) {
-        return Err(whitted::Error::msg("--threads must be at least 1"));
-    }
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.unwrap_or(0))
-        .build()
-        .map_err(|e| whitted::Error::msg(format!("cannot start the worker threads: {e}")))
-}
-
 /// Renders and writes the image.
 pub fn run(args: &RenderArgs) -> whitted::Result<()> {
     let start = Instant::now();
     let mut scene = load_scene(args.scene.as_deref())?;
-    for w in &scene.warnings {
-        eprintln!("whitted: warning: {w}");
-    }
-    if let Some(a) = args.aperture {
-        scene.camera.aperture = a;
-    }
-    if let Some(f) = args.focal {
-        scene.camera.focal = f;
-    }
-    let (width, height) = resolution(&scene, args.frame.width, args.frame.height)?;
-    let pool = thread_pool(args.frame.threads)?;
+    warn(&scene.warnings);
+    let plan = Plan::new(args, &mut scene)?;
+    let pool = thread_pool(plan.threads)?;
     let loaded = start.elapsed();
-    if args.passes == 1 && (args.every.is_some() || args.progressive_out.is_some()) {
-        return Err(whitted::Error::msg(
-            "--every and --progressive-out need --passes 2 or more",
-        ));
-    }
-
-    let partial = args.partial
-        || args
-            .output
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("partial"));
-    if !partial && (args.tiles.is_some() || args.passes_range.is_some()) {
-        return Err(whitted::Error::msg(
-            "--tiles and --passes-range render part of a frame: write it to a .partial file (-o part.partial) and combine the parts with `whitted merge`",
-        ));
-    }
-    if args.resume && !partial {
-        return Err(whitted::Error::msg("--resume applies to .partial outputs only"));
-    }
-    if partial && args.progressive_out.is_some() {
-        return Err(whitted::Error::msg(
-            "--progressive-out writes images; a .partial render cannot keep snapshots",
-        ));
-    }
-    let passes = args.passes_range.unwrap_or((0, args.passes));
-    if passes.1 > args.passes {
-        return Err(whitted::Error::msg(format!(
-            "--passes-range {}..{} goes beyond the render's {} passes (set --passes to the whole render's count)",
-            passes.0, passes.1, args.passes
-        )));
-    }
-
     let build_start = Instant::now();
-    let accel = Accel::build_with(
-        Prims::new(&scene),
-        args.frame.accel,
-        build_options(args.build, args.bins as usize),
-    );
+    let accel = Accel::build_with(Prims::new(&scene), plan.accel, plan.build);
     let built = build_start.elapsed();
-
-    let spp = args.spp.unwrap_or(scene.spp);
-    if args.passes > 1 && spp > 1 {
-        eprintln!(
-            "whitted: warning: progressive passes take one jittered sample per pixel each; spp {spp} ignored"
-        );
-    }
-    let options = Options {
-        width,
-        height,
-        max_depth: args.max_depth,
-        kernel: args.frame.kernel,
-        spp: if args.passes > 1 { 1 } else { spp },
-        seed: args.seed,
-        roughness: args.roughness,
-    };
-    let renderer = Renderer::new(&scene, &accel, options);
-    for w in &renderer.warnings {
-        eprintln!("whitted: warning: {w}");
-    }
+    warn(&plan.warnings);
+    let renderer = Renderer::new(&scene, &accel, plan.options);
+    warn(&renderer.warnings);
     // Ctrl-C stops at the next tile; what was written stays whole (files are renamed into place).
     // Installing fails only if another handler is set, as in tests that call `run` twice: keep it.
     let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::Relaxed));
-    if let Some(dir) = &args.progressive_out {
+    if let Target::Image {
+        snapshots: Some(dir), ..
+    } = &plan.target
+    {
         std::fs::create_dir_all(dir)
             .map_err(|e| whitted::Error::file(dir, format!("cannot create the directory: {e}")))?;
     }
 
     let render_start = Instant::now();
-    let (first, last) = passes;
-    let mut acc = match args.tiles {
-        Some((k, n)) => Progressive::for_tiles(width, height, tiles::part(width, height, k, n)),
-        None => Progressive::new(width, height),
-    };
-    let every = args.every.unwrap_or(if args.progressive_out.is_some() {
-        1
-    } else {
-        u32::MAX
-    });
-    let out = Output {
-        args,
-        partial: partial.then(|| Settings {
-            scene: scene.fingerprint(),
-            width,
-            height,
-            spp: options.spp,
-            seed: options.seed,
-            max_depth: options.max_depth,
-            aperture: scene.camera.aperture,
-            focal: scene.camera.focal,
-            roughness: options.roughness,
-            passes: args.passes,
-        }),
-        first,
-    };
-    if let (true, Some(settings)) = (args.resume, out.partial) {
-        // A missing or damaged file, or one of other settings, is rendered again and replaced.
-        if let Ok(done) = Part::read(&args.output) {
-            if done.settings == settings && done.passes == (first..last) && done.tiles == acc.tile_indices() {
-                if !args.quiet {
-                    eprintln!(
-                        "whitted: {} holds this part already; not rendered again",
-                        args.output.display()
-                    );
-                }
-                return Ok(());
-            }
+    let mut acc = plan.accumulator();
+    if done_already(&plan, &acc) {
+        if !plan.quiet {
+            let output = plan.output.display();
+            eprintln!("whitted: {output} holds this part already; not rendered again");
         }
+        return Ok(());
     }
-    for pass in first + 1..=last {
-        let mut label = Vec::new();
-        if let Some((k, n)) = args.tiles {
-            label.push(format!("part {k}/{n}"));
-        }
-        if args.passes > 1 {
-            label.push(format!("pass {pass}/{}", args.passes));
-        }
-        if pool
-            .install(|| render_with_progress(&renderer, &mut acc, pass, label.join(", "), args.quiet))
-            .is_none()
-        {
-            break;
-        }
-        if acc.passes() % every == 0 && pass < last {
-            out.write(&acc)?;
-        }
-    }
+    render_passes(&plan, &pool, &renderer, &mut acc)?;
     let rendered = render_start.elapsed();
     if acc.passes() == 0 {
         return Err(whitted::Error::msg(
             "interrupted before the first pass was complete; nothing written",
         ));
     }
-    out.write(&acc)?;
-    if !args.quiet {
-        let wanted = last - first;
-        let passes = match wanted {
-            1 => String::new(),
-            n if acc.passes() < n => format!(", interrupted after {} of {n} passes", acc.passes()),
-            n => format!(", {n} passes"),
-        };
-        let part = match (args.tiles, args.passes_range) {
-            (None, None) => String::new(),
-            (tiles, range) => {
-                let tiles = tiles.map(|(k, n)| format!("part {k}/{n}, "));
-                let range = range.map(|(a, b)| format!("passes {a}..{b} of {}, ", args.passes));
-                format!(", {}{}", tiles.unwrap_or_default(), range.unwrap_or_default())
-                    .trim_end_matches(", ")
-                    .to_string()
-            }
-        };
+    write(&plan, &acc)?;
+    if !plan.quiet {
+        let threads = pool.current_num_threads();
         eprintln!(
-            "whitted: {}x{} in {:.3} s (load {:.3} s, build {:.3} s, accel {:?}, kernel {:?}, {} threads{passes}{part}) -> {}",
-            width,
-            height,
-            rendered.as_secs_f64(),
-            loaded.as_secs_f64(),
-            built.as_secs_f64(),
-            args.frame.accel,
-            args.frame.kernel,
-            pool.current_num_threads(),
-            args.output.display()
+            "whitted: {}",
+            summary(&plan, &acc, [loaded, built, rendered], threads)
         );
+    }
+    if let Some(format) = args.report.stats {
+        let times = [loaded, built, rendered];
+        Report::of_render(args, &plan, &accel, &pool, times, &acc).print(format);
     }
     Ok(())
 }
 
-/// Where and how the render is written.
-struct Output<'a> {
-    args: &'a RenderArgs,
-    /// The settings a .partial file records; `None` for an image.
-    partial: Option<Settings>,
-    /// The first pass rendered (from 0).
-    first: u32,
+/// Prints `warnings` on stderr, one a line.
+fn warn(warnings: &[String]) {
+    for w in warnings {
+        eprintln!("whitted: warning: {w}");
+    }
 }
 
-impl Output<'_> {
-    /// Writes the sums or the mean so far to the output and, with `--progressive-out`, a numbered copy.
-    fn write(&self, acc: &Progressive) -> whitted::Result<()> {
-        let args = self.args;
-        if let Some(settings) = self.partial {
-            let part = Part::new(settings, acc, self.first, args.tiles.unwrap_or((0, 1)));
-            return part.write(&args.output);
+/// With `--resume`: whether the output holds exactly this part of this render already (a missing or
+/// damaged file, or one of other settings, is rendered again and replaced).
+fn done_already(plan: &Plan, acc: &Progressive) -> bool {
+    let Target::Partial {
+        settings,
+        resume: true,
+    } = &plan.target
+    else {
+        return false;
+    };
+    Part::read(&plan.output).is_ok_and(|done| {
+        done.settings == *settings && done.passes == plan.passes() && done.tiles == acc.tile_indices()
+    })
+}
+
+/// Renders the plan's passes into `acc`, writing the output every `plan.every` passes before the last;
+/// Ctrl-C stops it after the last complete pass.
+fn render_passes(
+    plan: &Plan,
+    pool: &rayon::ThreadPool,
+    renderer: &Renderer,
+    acc: &mut Progressive,
+) -> whitted::Result<()> {
+    let passes = plan.passes();
+    for pass in passes.start + 1..=passes.end {
+        let mut label = Vec::new();
+        if let Some((k, n)) = plan.tiles {
+            label.push(format!("part {k}/{n}"));
         }
-        let film = acc.film();
-        film.write(&args.output, args.srgb)?;
-        if let Some(dir) = &args.progressive_out {
-            let stem = args.output.file_stem().unwrap_or_default().to_string_lossy();
-            let ext = args.output.extension().unwrap_or_default().to_string_lossy();
-            let name = format!("{stem}-{:04}.{ext}", acc.passes());
-            film.write(&dir.join(name), args.srgb)?;
+        if plan.total_passes > 1 {
+            label.push(format!("pass {pass}/{}", plan.total_passes));
         }
-        Ok(())
+        let label = label.join(", ");
+        if pool
+            .install(|| render_with_progress(renderer, acc, pass, label, plan.quiet))
+            .is_none()
+        {
+            break;
+        }
+        if acc.passes() % plan.every == 0 && pass < passes.end {
+            write(plan, acc)?;
+        }
     }
+    Ok(())
+}
+
+/// Writes the sums or the mean so far to the output and, with `--progressive-out`, a numbered copy.
+fn write(plan: &Plan, acc: &Progressive) -> whitted::Result<()> {
+    let (srgb, snapshots) = match &plan.target {
+        Target::Partial { settings, .. } => {
+            let part = Part::new(*settings, acc, plan.passes().start, plan.tiles.unwrap_or((0, 1)));
+            return part.write(&plan.output);
+        }
+        Target::Image { srgb, snapshots } => (*srgb, snapshots),
+    };
+    let film = image(&plan.options, acc.film());
+    film.write(&plan.output, srgb)?;
+    if let Some(dir) = snapshots {
+        let stem = plan.output.file_stem().unwrap_or_default().to_string_lossy();
+        let ext = plan.output.extension().unwrap_or_default().to_string_lossy();
+        let name = format!("{stem}-{:04}.{ext}", acc.passes());
+        film.write(&dir.join(name), srgb)?;
+    }
+    Ok(())
+}
+
+/// The line printed after a render: size, times (load, build, render), accelerator, kernel, threads,
+/// passes and part.
+fn summary(
+    plan: &Plan,
+    acc: &Progressive,
+    [loaded, built, rendered]: [Duration; 3],
+    threads: usize,
+) -> String {
+    let range = plan.passes();
+    let passes = match range.end - range.start {
+        1 => String::new(),
+        n if acc.passes() < n => format!(", interrupted after {} of {n} passes", acc.passes()),
+        n => format!(", {n} passes"),
+    };
+    let part = match (plan.tiles, &plan.pass_range) {
+        (None, None) => String::new(),
+        (tiles, range) => {
+            let tiles = tiles.map(|(k, n)| format!("part {k}/{n}, "));
+            let range = range
+                .as_ref()
+                .map(|r| format!("passes {}..{} of {}, ", r.start, r.end, plan.total_passes));
+            format!(", {}{}", tiles.unwrap_or_default(), range.unwrap_or_default())
+                .trim_end_matches(", ")
+                .to_string()
+        }
+    };
+    let (width, height) = report::image_size(&plan.options);
+    format!(
+        "{width}x{height} in {:.3} s (load {:.3} s, build {:.3} s, accel {:?}, kernel {:?}, {threads} threads{passes}{part}) -> {}",
+        rendered.as_secs_f64(),
+        loaded.as_secs_f64(),
+        built.as_secs_f64(),
+        plan.accel,
+        plan.options.kernel,
+        plan.output.display()
+    )
 }
 
 /// Renders pass `pass` into `acc` with a progress bar on stderr that appears only if the pass takes

@@ -6,7 +6,7 @@ use clap::Args;
 use whitted::render::Options;
 use whitted::view::{self, Config, state::MAX_DEPTH};
 
-use super::render::{FrameArgs, load_scene, resolution, thread_pool};
+use super::args::{FrameArgs, load_scene, resolution, thread_pool};
 
 /// Arguments of `whitted view`.
 #[derive(Args)]
@@ -41,7 +41,15 @@ pub fn run(args: &ViewArgs) -> whitted::Result<()> {
     for w in &scene.warnings {
         eprintln!("whitted: warning: {w}");
     }
-    let (width, height) = resolution(&scene, args.frame.width, args.frame.height)?;
+    let (width, height) = resolution(&scene, args.frame.width, args.frame.height);
+    let options = Options {
+        width,
+        height,
+        max_depth: args.max_depth,
+        kernel: args.frame.kernel,
+        ..Options::new(&scene)
+    };
+    options.validate()?;
     let pool = thread_pool(args.frame.threads)?;
     let name = match &args.scene {
         Some(path) => path
@@ -53,13 +61,8 @@ pub fn run(args: &ViewArgs) -> whitted::Result<()> {
     };
     let config = Config {
         name,
-        options: Options {
-            width,
-            height,
-            max_depth: args.max_depth,
-            kernel: args.frame.kernel,
-            ..Options::new(&scene)
-        },
+        scene: args.scene.clone(),
+        options,
         accel: args.frame.accel,
         srgb: args.srgb,
         frames: args.frames,

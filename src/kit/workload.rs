@@ -1,4 +1,4 @@
-//! The benchmark ray sets of `shared/bench/dragon-workload.md`, generated from a scene: primary rays
+//! The benchmark ray sets of `docs/dragon-workload.md`, generated from a scene: primary rays
 //! through every pixel centre, a shadow ray from each primary hit to the first point light (any-hit), and
 //! one cosine-weighted diffuse bounce from each hit (closest-hit, incoherent). The kernels bench and the
 //! profiles trace these same rays, so their figures compare.

@@ -2,6 +2,7 @@
 
 use glam::{Vec2, Vec3};
 
+use crate::geometry::length_and_direction;
 use crate::geometry::ray::Ray;
 use crate::scene::Camera;
 
@@ -30,11 +31,11 @@ impl RayCamera {
     /// aperture is the lens diameter in pixels of that plane (pixel size 2·d·tan(angle/2) / height), and
     /// the plane in focus lies at `focal` · d.
     pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
-        let forward = (camera.at - camera.from).normalize();
-        let right = forward.cross(camera.up).normalize();
+        // Robust against cameras far from their target, or with a huge `up` (validated finite).
+        let (view_distance, forward) = length_and_direction(camera.at - camera.from);
+        let right = length_and_direction(forward.cross(camera.up)).1;
         let up = right.cross(forward);
         let tan = (camera.fov_y.to_radians() * 0.5).tan();
-        let view_distance = (camera.at - camera.from).length();
         let pixel_size = 2.0 * view_distance * tan / height as f32;
         RayCamera {
             eye: camera.from,
@@ -89,7 +90,7 @@ impl RayCamera {
 mod tests {
     use super::*;
 
-    /// The dragon workload's camera formula (`shared/bench/dragon-workload.md`), pixel by pixel.
+    /// The dragon workload's camera formula (`docs/dragon-workload.md`), pixel by pixel.
     #[test]
     #[allow(clippy::excessive_precision)] // the workload document's figures, as written
     fn matches_the_workload_formula() {

@@ -59,66 +59,161 @@ impl Film {
             .collect()
     }
 
-    /// Writes the image; the format follows the extension: `.png`, `.ppm` (8-bit) or `.exr` (linear,
-    /// unclamped 32-bit float, where `srgb` does not apply).
+    /// Writes the image in the format its extension names ([`ImageFormat`]), atomically
+    /// ([`write_atomically`]). PNG records its colour space: an sRGB chunk with `srgb`, else a gAMA
+    /// chunk of 1.0 (linear values), so viewers show what the numbers mean.
     pub fn write(&self, path: &Path, srgb: bool) -> Result<()> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase)
-            .unwrap_or_default();
-        let format = match ext.as_str() {
-            "png" => image::ImageFormat::Png,
-            "ppm" => image::ImageFormat::Pnm,
-            "exr" => image::ImageFormat::OpenExr,
-            _ => {
-                return Err(Error::file(
-                    path,
-                    "unknown image format: expected a .png, .ppm or .exr file name",
-                ));
+        let format = ImageFormat::of(path)?;
+        write_atomically(path, |tmp| {
+            let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+            let out = std::io::BufWriter::new(file);
+            match format {
+                ImageFormat::Png => self.write_png(out, srgb).map_err(|e| e.to_string()),
+                ImageFormat::Ppm => {
+                    // A binary P6 pixmap: the image crate's default PNM flavour is PAM (P7), which
+                    // few viewers read under a .ppm name.
+                    use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
+                    PnmEncoder::new(out)
+                        .with_subtype(PnmSubtype::Pixmap(SampleEncoding::Binary))
+                        .encode(
+                            &self.to_rgb8(srgb)[..],
+                            self.width,
+                            self.height,
+                            image::ExtendedColorType::Rgb8,
+                        )
+                        .map_err(|e| e.to_string())
+                }
+                ImageFormat::Jpeg => image::codecs::jpeg::JpegEncoder::new_with_quality(out, JPEG_QUALITY)
+                    .encode(
+                        &self.to_rgb8(srgb),
+                        self.width,
+                        self.height,
+                        image::ExtendedColorType::Rgb8,
+                    )
+                    .map_err(|e| e.to_string()),
+                ImageFormat::Exr => {
+                    let data: Vec<f32> = self.pixels.iter().flat_map(|p| p.to_array()).collect();
+                    image::Rgb32FImage::from_raw(self.width, self.height, data)
+                        .expect("buffer size matches")
+                        .write_with_encoder(image::codecs::openexr::OpenExrEncoder::new(out))
+                        .map_err(|e| e.to_string())
+                }
             }
-        };
-        let tmp = temporary_name(path);
-        let result = match format {
-            image::ImageFormat::OpenExr => {
-                let data: Vec<f32> = self.pixels.iter().flat_map(|p| p.to_array()).collect();
-                image::Rgb32FImage::from_raw(self.width, self.height, data)
-                    .expect("buffer size matches")
-                    .save_with_format(&tmp, format)
-            }
-            image::ImageFormat::Pnm => {
-                // A binary P6 pixmap: the image crate's default PNM flavour is PAM (P7), which few
-                // viewers read under a .ppm name.
-                use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
-                std::fs::File::create(&tmp)
-                    .map_err(image::ImageError::IoError)
-                    .and_then(|file| {
-                        PnmEncoder::new(std::io::BufWriter::new(file))
-                            .with_subtype(PnmSubtype::Pixmap(SampleEncoding::Binary))
-                            .encode(
-                                &self.to_rgb8(srgb)[..],
-                                self.width,
-                                self.height,
-                                image::ExtendedColorType::Rgb8,
-                            )
-                    })
-            }
-            _ => image::RgbImage::from_raw(self.width, self.height, self.to_rgb8(srgb))
-                .expect("buffer size matches")
-                .save_with_format(&tmp, format),
-        };
-        let result = result
-            .map_err(|e| e.to_string())
-            .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
-        result.map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            Error::file(path, format!("cannot write the image: {e}"))
         })
+        .map_err(|e| Error::file(path, format!("cannot write the image: {e}")))
+    }
+
+    /// 8-bit RGB PNG with its colour space recorded.
+    fn write_png(&self, out: impl std::io::Write, srgb: bool) -> std::result::Result<(), png::EncodingError> {
+        let mut encoder = png::Encoder::new(out, self.width, self.height);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        if srgb {
+            encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        } else {
+            encoder.set_source_gamma(png::ScaledFloat::new(1.0));
+        }
+        let mut writer = encoder.write_header()?;
+        writer.write_image_data(&self.to_rgb8(srgb))?;
+        writer.finish()
     }
 }
 
-/// `dir/.name.PID.tmp`: in the same directory (so the rename is atomic), hidden, unique per process.
-pub(crate) fn temporary_name(path: &Path) -> PathBuf {
+/// JPEG quality (of 100): high enough that the 8-bit rounding, not the codec, dominates the error.
+const JPEG_QUALITY: u8 = 95;
+
+/// The image formats the film is written in, named by the output's extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// `.png`: 8-bit RGB with its colour space recorded.
+    Png,
+    /// `.ppm`: 8-bit binary pixmap (P6).
+    Ppm,
+    /// `.jpg`, `.jpeg`: 8-bit, lossy.
+    Jpeg,
+    /// `.exr`: linear, unclamped 32-bit float (`--srgb` does not apply).
+    Exr,
+}
+
+impl ImageFormat {
+    /// The format `path`'s extension names, or an error that lists the known ones.
+    pub fn of(path: &Path) -> Result<Self> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("png") => Ok(ImageFormat::Png),
+            Some("ppm") => Ok(ImageFormat::Ppm),
+            Some("jpg" | "jpeg") => Ok(ImageFormat::Jpeg),
+            Some("exr") => Ok(ImageFormat::Exr),
+            _ => Err(Error::file(
+                path,
+                "unknown image format: expected a .png, .ppm, .jpg, .jpeg or .exr file name",
+            )),
+        }
+    }
+}
+
+/// Checks, before any work, that `path` can be written as [`write_atomically`] will: its directory
+/// exists and takes a new file (one is created there and removed), and what is at `path`, if
+/// anything, is a regular file it may replace.
+pub fn check_writable(path: &Path) -> Result<()> {
+    check_target(path).map_err(|e| Error::file(path, e))?;
+    let tmp = temporary_name(path);
+    std::fs::File::create(&tmp)
+        .and_then(|_| std::fs::remove_file(&tmp))
+        .map_err(|e| Error::file(path, format!("cannot write in {}: {e}", dir_of(path).display())))
+}
+
+/// The directory a path's file goes in.
+fn dir_of(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// What is at `path` may be replaced: nothing, or a regular file (not a directory, a link or a device,
+/// which a rename would replace by a file).
+fn check_target(path: &Path) -> std::result::Result<(), String> {
+    let dir = dir_of(path);
+    if !dir.is_dir() {
+        return Err(format!("the directory {} does not exist", dir.display()));
+    }
+    match std::fs::symlink_metadata(path) {
+        Ok(m) if !m.file_type().is_file() => {
+            Err("is not a regular file (a directory, a link or a device); refusing to replace it".into())
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Writes `path` through `write`, which fills a temporary file beside it (same directory, so the
+/// rename is atomic), then renames that into place: a failed or interrupted write never leaves half a
+/// file under the real name, and an existing file keeps its permissions. Refuses to replace anything
+/// but a regular file. On failure the temporary is removed.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
+) -> std::result::Result<(), String> {
+    check_target(path)?;
+    let previous = std::fs::metadata(path).ok().map(|m| m.permissions());
+    let tmp = temporary_name(path);
+    let result = write(&tmp).and_then(|()| {
+        if let Some(permissions) = previous {
+            std::fs::set_permissions(&tmp, permissions).map_err(|e| e.to_string())?;
+        }
+        std::fs::rename(&tmp, path).map_err(|e| e.to_string())
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// `dir/.name.PID.tmp.ext`: in the same directory (so the rename is atomic), hidden, unique per process.
+fn temporary_name(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -162,6 +257,11 @@ mod tests {
         let bad = dir.path().join("missing-dir").join("b.png");
         assert!(film.write(&bad, false).is_err());
         assert!(film.write(&dir.path().join("c.gif"), false).is_err());
+        // JPEG: lossy, but close at 95.
+        let jpg = dir.path().join("f.JPEG");
+        film.write(&jpg, false).unwrap();
+        let px = image::open(&jpg).unwrap().to_rgb8().get_pixel(1, 1).0;
+        assert!(px[0] > 200 && (100..160).contains(&px[1]) && px[2] < 60, "{px:?}");
         // PPM is a binary P6 pixmap; EXR keeps the linear, unclamped floats.
         let ppm = dir.path().join("d.ppm");
         film.write(&ppm, false).unwrap();
@@ -177,5 +277,85 @@ mod tests {
             image::open(&exr).unwrap().to_rgb32f().get_pixel(0, 0).0,
             [2.5, 0.0, 0.0]
         );
+    }
+
+    /// PNG says what its numbers mean: gAMA 1.0 for the linear default, an sRGB chunk with `--srgb`.
+    #[test]
+    fn png_records_its_colour_space() {
+        let dir = tempfile::tempdir().unwrap();
+        let film = Film::new(2, 2);
+        for (srgb, name) in [(false, "linear.png"), (true, "srgb.png")] {
+            let path = dir.path().join(name);
+            film.write(&path, srgb).unwrap();
+            let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
+            let reader = decoder.read_info().unwrap();
+            let info = reader.info();
+            if srgb {
+                assert_eq!(info.srgb, Some(png::SrgbRenderingIntent::Perceptual));
+            } else {
+                assert_eq!(info.srgb, None);
+                assert_eq!(info.gama_chunk, Some(png::ScaledFloat::new(1.0)));
+            }
+        }
+    }
+
+    /// A write that fails after its temporary file was created leaves no temporary and no output; an
+    /// existing output keeps its permissions when replaced; links and directories are not replaced.
+    #[cfg(unix)]
+    #[test]
+    fn atomic_writes_clean_up_keep_permissions_and_refuse_non_files() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("a.png");
+        let failed = write_atomically(&out, |tmp| {
+            std::fs::write(tmp, b"half").unwrap();
+            Err("the encoder failed".into())
+        });
+        assert_eq!(failed.unwrap_err(), "the encoder failed");
+        assert_eq!(
+            std::fs::read_dir(dir.path()).unwrap().count(),
+            0,
+            "a temporary was left behind"
+        );
+
+        let film = Film::new(2, 1);
+        film.write(&out, false).unwrap();
+        std::fs::set_permissions(&out, std::fs::Permissions::from_mode(0o444)).unwrap();
+        film.write(&out, true).unwrap();
+        assert_eq!(
+            std::fs::metadata(&out).unwrap().permissions().mode() & 0o777,
+            0o444
+        );
+
+        let link = dir.path().join("link.png");
+        std::os::unix::fs::symlink(&out, &link).unwrap();
+        let e = film.write(&link, false).unwrap_err().to_string();
+        assert!(e.contains("is not a regular file"), "{e}");
+        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+        let sub = dir.path().join("sub.png");
+        std::fs::create_dir(&sub).unwrap();
+        assert!(
+            film.write(&sub, false)
+                .unwrap_err()
+                .to_string()
+                .contains("is not a regular file")
+        );
+        assert_eq!(
+            check_writable(&dir.path().join("nowhere/x.png"))
+                .unwrap_err()
+                .to_string(),
+            format!(
+                "{}: the directory {} does not exist",
+                dir.path().join("nowhere/x.png").display(),
+                dir.path().join("nowhere").display()
+            )
+        );
+        check_writable(&dir.path().join("new.png")).unwrap();
+        assert!(!dir.path().join("new.png").exists());
+        assert_eq!(
+            ImageFormat::of(Path::new("x.gif")).unwrap_err().to_string(),
+            "x.gif: unknown image format: expected a .png, .ppm, .jpg, .jpeg or .exr file name"
+        );
+        assert_eq!(ImageFormat::of(Path::new("x.JPG")).unwrap(), ImageFormat::Jpeg);
     }
 }

@@ -37,6 +37,9 @@ pub struct Renderer<'a> {
     camera: RayCamera,
     /// Samples per pixel side: n × n per pixel, 0 for one ray through the centre.
     side: u32,
+    /// Where a pixel's one ray goes at spp 0, from its top-left corner: 0.5 (its centre), or 0 for
+    /// corner rays.
+    centre: f32,
     options: Options,
     /// What the renderer fell back on (a skybox that did not load, say), for the user to see.
     pub warnings: Vec<String>,
@@ -83,12 +86,20 @@ impl<'a> Renderer<'a> {
             side > 0,
             options.max_depth,
             options.roughness,
+            options.spd,
         );
         Renderer {
             whitted,
             // At spp 0 the camera rays go through the pixel centres from the eye (a pinhole).
-            camera: RayCamera::new(camera, options.width, options.height),
+            camera: if options.spd {
+                // Corners 0..=w of a w-pixel-wide image: the camera of the image, rays at whole
+                // pixel coordinates.
+                RayCamera::new(camera, options.width.max(2) - 1, options.height.max(2) - 1)
+            } else {
+                RayCamera::new(camera, options.width, options.height)
+            },
             side,
+            centre: if options.spd { 0.0 } else { 0.5 },
             options,
             warnings,
         }
@@ -130,7 +141,7 @@ impl<'a> Renderer<'a> {
         let (x, y) = (x as f32, y as f32);
         if self.side == 0 {
             return (
-                self.camera.ray(x + 0.5, y + 0.5),
+                self.camera.ray(x + self.centre, y + self.centre),
                 self.pixel_sample(pass, index, 0, Vec2::splat(0.5)),
             );
         }

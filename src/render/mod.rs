@@ -18,15 +18,16 @@ pub mod env;
 pub mod film;
 pub mod frame;
 pub mod light;
+pub mod memory;
 pub mod optics;
 mod options;
 pub mod packets;
-pub mod partial;
 pub mod progressive;
 pub mod sampler;
+pub mod spd;
 pub mod tiles;
 pub mod whitted;
 
 pub use frame::Renderer;
-pub use options::{Kernel, Options};
+pub use options::{Kernel, MAX_DEPTH, MAX_SPP, Options};
 pub use whitted::RayCounts;

@@ -27,9 +27,17 @@ impl std::str::FromStr for Kernel {
     }
 }
 
-/// The most samples per pixel: the largest n × n whose count fits in a `u32`, since a count that is not
-/// a square is rounded up to the next one.
-const MAX_SPP: u32 = 65535 * 65535;
+/// The most samples per pixel in one pass: 256 × 256. A worker keeps the sample patterns of eight
+/// pixels (a packet), 16 bytes a sample each: 8 MiB at this bound. More samples than that belong in
+/// progressive passes (`--passes`), which cost no memory per sample.
+pub const MAX_SPP: u32 = 256 * 256;
+
+/// The most bounces after the primary hit. Shading recurses once per bounce, the packet kernel with
+/// eight rays' state per level: 64 levels among nested glass spheres fit in 512 KiB of stack (and
+/// overflow 256 KiB), a quarter of a rayon worker's 2 MiB (`tests/limits.rs` renders them on such a
+/// worker); the 3,000 bounces once accepted needed about 50 times that. However deep a tree may go, it
+/// cannot grow past a fixed number of rays ([`super::whitted`]'s split budget).
+pub const MAX_DEPTH: u32 = 64;
 
 /// What to render, beyond the scene itself.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -38,18 +46,23 @@ pub struct Options {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
-    /// Most bounces after the primary hit; at the limit only the local colour is computed. Any count is
-    /// accepted for now: a bound on it is a change of behaviour of its own.
+    /// Most bounces after the primary hit, at most [`MAX_DEPTH`]; at the limit only the local colour is
+    /// computed.
     pub max_depth: u32,
     /// Single rays or packets for the camera rays.
     pub kernel: Kernel,
     /// Samples per pixel: 0 for one ray through the centre; otherwise n × n jittered samples (a count
-    /// that is not a square is rounded up to the next one), at most 65535², the largest square in a `u32`.
+    /// that is not a square is rounded up to the next one), at most [`MAX_SPP`].
     pub spp: u32,
     /// Seed of every random number of the frame.
     pub seed: u64,
     /// Roughness of the materials whose `f` line does not give one: finite and at least 0.
     pub roughness: f32,
+    /// The Standard Procedural Databases' test procedure ([`super::spd`]): camera rays through pixel
+    /// corners instead of centres, so the frame's `width` × `height` samples are the corners of a
+    /// (`width` − 1) × (`height` − 1) image ([`super::spd::corners_to_pixels`] averages them into it),
+    /// and a total internal reflection spawns its mirror ray whatever the material's `Ks`. Needs spp 0.
+    pub spd: bool,
 }
 
 impl Options {
@@ -63,6 +76,7 @@ impl Options {
             spp: scene.spp,
             seed: 0,
             roughness: 0.0,
+            spd: false,
         }
     }
 
@@ -72,8 +86,21 @@ impl Options {
         check_resolution(self.width, self.height).map_err(Error::msg)?;
         if self.spp > MAX_SPP {
             return Err(Error::msg(format!(
-                "{} samples per pixel is more than the most, {MAX_SPP} (65535 x 65535)",
+                "{} samples per pixel is more than the most, {MAX_SPP} (256 x 256); for more, average \
+                 progressive passes (--passes)",
                 self.spp
+            )));
+        }
+        if self.max_depth > MAX_DEPTH {
+            return Err(Error::msg(format!(
+                "a depth of {} bounces is more than the most, {MAX_DEPTH}",
+                self.max_depth
+            )));
+        }
+        if self.spd && (self.spp != 0 || self.width < 2 || self.height < 2) {
+            return Err(Error::msg(format!(
+                "the SPD procedure needs spp 0 and at least 2 x 2 corners, found spp {} and {}x{}",
+                self.spp, self.width, self.height
             )));
         }
         if !(self.roughness.is_finite() && self.roughness >= 0.0) {
@@ -106,7 +133,7 @@ mod tests {
         options().validate().unwrap();
         for o in [
             Options {
-                max_depth: u32::MAX,
+                max_depth: MAX_DEPTH,
                 ..options()
             },
             Options {
@@ -139,8 +166,28 @@ mod tests {
         };
         assert_eq!(
             error(o),
-            "4294836226 samples per pixel is more than the most, 4294836225 (65535 x 65535)"
+            "65537 samples per pixel is more than the most, 65536 (256 x 256); for more, average \
+             progressive passes (--passes)"
         );
+        let o = Options {
+            spp: u32::MAX,
+            ..options()
+        };
+        assert!(error(o).starts_with("4294967295 samples per pixel is more than the most"));
+    }
+
+    #[test]
+    fn refuses_more_bounces_than_the_stack_is_sized_for() {
+        for depth in [65, 3000, u32::MAX] {
+            let o = Options {
+                max_depth: depth,
+                ..options()
+            };
+            assert_eq!(
+                error(o),
+                format!("a depth of {depth} bounces is more than the most, 64")
+            );
+        }
     }
 
     #[test]

@@ -40,12 +40,17 @@ impl Whitted<'_> {
     ) -> PerRay<Vec3> {
         let mut hits = [Hit::miss(f32::INFINITY); PACKET];
         let hit = self.accel.intersect_packet(rays, active, 0.0, &mut hits);
+        if depth == 0 {
+            for k in bits(hit) {
+                samples[k].rays.primary_hits += 1;
+            }
+        }
         let surfaces: PerRay<Option<Surface>> =
             std::array::from_fn(|k| (hit >> k & 1 == 1).then(|| self.prims.surface(&rays[k], &hits[k])));
         let blocked = self.shadow_packets(&surfaces, samples);
 
         let bounces: PerRay<Bounces> = std::array::from_fn(|k| match &surfaces[k] {
-            Some(s) => self.bounces(&rays[k], s, depth, &mut samples[k].rng),
+            Some(s) => self.bounces(&rays[k], s, depth, &mut samples[k]),
             None => Bounces::default(),
         });
         for (sample, b) in samples.iter_mut().zip(&bounces) {

@@ -6,7 +6,7 @@
 //! of a few thousand `f32` values is exact in `f64`'s 53 bits, so the mean does not drift with n as the
 //! incremental `f32` form does, and, unlike a mean, sums of passes rendered apart (on other machines, or
 //! other days) add up to exactly the sum of all of them. That is what makes a frame split into pass
-//! ranges ([`super::partial`]) merge into the same image as one long render.
+//! ranges ([`crate::parts`]) merge into the same image as one long render.
 //!
 //! A `Progressive` covers the whole frame or a subset of its tiles (`--tiles K/N`).
 
@@ -30,6 +30,8 @@ pub struct Progressive {
     /// The tiles' pixels, tile after tile, each tile row-major at its own width.
     sums: Vec<[f64; 3]>,
     passes: u32,
+    /// The rays the passes folded in by [`Progressive::render_pass`] traced.
+    rays: RayCounts,
 }
 
 impl Progressive {
@@ -55,6 +57,7 @@ impl Progressive {
             tiles,
             sums: vec![[0.0; 3]; pixels],
             passes: 0,
+            rays: RayCounts::default(),
         }
     }
 
@@ -87,12 +90,19 @@ impl Progressive {
             }
         })?;
         self.passes += 1;
+        self.rays += rays;
         Some(rays)
     }
 
     /// Passes folded in so far.
     pub fn passes(&self) -> u32 {
         self.passes
+    }
+
+    /// The rays traced by the passes folded in so far, summed (for `render --stats`: a stopped pass
+    /// adds none).
+    pub fn rays(&self) -> RayCounts {
+        self.rays
     }
 
     /// The frame's size.
@@ -137,4 +147,42 @@ pub(crate) fn area(t: Tile) -> usize {
 /// merged from parts gives the same bits as the same sum made in one go.
 pub(crate) fn mean(sum: [f64; 3], n: f64) -> Vec3 {
     Vec3::new((sum[0] / n) as f32, (sum[1] / n) as f32, (sum[2] / n) as f32)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::atomic::AtomicBool;
+
+    use super::*;
+    use crate::accel::{Accel, AccelKind, Prims};
+    use crate::render::Options;
+    use crate::scene::{Camera, Material, Scene};
+
+    #[test]
+    fn the_rays_of_the_passes_add_up() {
+        let camera = Camera::new(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 45.0, 20, 10);
+        let mut scene = Scene::new(camera);
+        let m = scene.add_material(Material::default());
+        scene.add_sphere(Vec3::ZERO, 1.0, m);
+        scene.add_point_light(Vec3::new(0.0, 5.0, 5.0), Vec3::ONE);
+        let accel = Accel::build(Prims::new(&scene), AccelKind::Bvh4);
+        let options = Options {
+            spp: 1,
+            ..Options::new(&scene)
+        };
+        let renderer = Renderer::new(&scene, &accel, options);
+        let mut acc = Progressive::new(20, 10);
+        let never = AtomicBool::new(false);
+        let first = acc.render_pass(&renderer, 1, &|| {}, &never).unwrap();
+        let mut both = first;
+        both += acc.render_pass(&renderer, 2, &|| {}, &never).unwrap();
+        assert_eq!(acc.rays(), both);
+        assert_eq!(acc.rays().primary, 2 * 200);
+        // One shadow ray per hit that faces the light, none for the hits that face away.
+        let r = first;
+        assert!(
+            r.primary_hits > 0 && r.shadow > 0 && r.shadow <= r.primary_hits,
+            "{r:?}"
+        );
+    }
 }

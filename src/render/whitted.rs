@@ -14,6 +14,7 @@ use glam::{Vec2, Vec3};
 use super::env::Background;
 use super::light::{self, LightSample, Lights};
 use super::optics::{beer, reflect, refract, schlick};
+use super::options::MAX_DEPTH;
 use super::sampler::Sampler;
 use crate::accel::{Accel, Hit, Prims, Surface};
 use crate::geometry::ray::Ray;
@@ -68,6 +69,8 @@ pub struct Bounces {
 pub struct RayCounts {
     /// Camera rays.
     pub primary: u64,
+    /// Camera rays that hit something (not counted in [`RayCounts::total`]: they are camera rays).
+    pub primary_hits: u64,
     /// Shadow rays (any hit).
     pub shadow: u64,
     /// Mirror rays.
@@ -92,6 +95,7 @@ impl RayCounts {
 impl std::ops::AddAssign for RayCounts {
     fn add_assign(&mut self, o: RayCounts) {
         self.primary += o.primary;
+        self.primary_hits += o.primary_hits;
         self.shadow += o.shadow;
         self.reflected += o.reflected;
         self.refracted += o.refracted;
@@ -112,6 +116,16 @@ pub struct PixelSample<'a> {
 /// Tries at drawing a fuzzy reflection above the surface before settling for the mirror direction.
 const FUZZ_TRIES: u32 = 16;
 
+/// Secondary rays a pixel sample may spend on split paths: past this count, a hit that would spawn
+/// both a refracted and a reflected ray spawns only the heavier of the two. A transparent surface
+/// doubles the rays at every bounce, so without a bound a camera among nested glass spheres at
+/// [`super::options::MAX_DEPTH`] bounces would trace 2⁶⁵ rays; with it a sample's tree holds at most
+/// this many splits and each of its at most this many open branches then goes on as one chain of at
+/// most `MAX_DEPTH` rays. Trees of up to 9 bounces (1,022 secondary rays) never reach it, so images
+/// at the usual depths are untouched (the default of 6 spawns at most 126). Both kernels count a
+/// sample's rays in the same order, so they cut the same branches.
+const SPLIT_BUDGET: u64 = 1024;
+
 /// The integrator of one frame: the scene, the structure that answers its rays, what a ray that leaves
 /// the scene sees, the light samples and each material's roughness; shared read-only by the workers.
 pub struct Whitted<'a> {
@@ -127,6 +141,8 @@ pub struct Whitted<'a> {
     roughness: Vec<f32>,
     /// Most bounces after the primary hit.
     max_depth: u32,
+    /// The SPD rules ([`super::spd`]): a total internal reflection always spawns its mirror ray.
+    spd: bool,
 }
 
 impl<'a> Whitted<'a> {
@@ -140,6 +156,7 @@ impl<'a> Whitted<'a> {
         sampled_lights: bool,
         max_depth: u32,
         roughness: f32,
+        spd: bool,
     ) -> Self {
         let (fixed_lights, quads) = if sampled_lights {
             (light::point_samples(scene), &scene.area_lights[..])
@@ -158,7 +175,9 @@ impl<'a> Whitted<'a> {
                 .iter()
                 .map(|m| m.roughness.unwrap_or(roughness))
                 .collect(),
-            max_depth,
+            // Unvalidated options are clamped rather than allowed to overflow the stack.
+            max_depth: max_depth.min(MAX_DEPTH),
+            spd,
         }
     }
 
@@ -189,8 +208,9 @@ impl<'a> Whitted<'a> {
         if !hit.is_hit() {
             return self.background.sample(ray.dir);
         }
+        sample.rays.primary_hits += u64::from(depth == 0);
         let surface = self.prims.surface(ray, hit);
-        let bounces = self.bounces(ray, &surface, depth, &mut sample.rng);
+        let bounces = self.bounces(ray, &surface, depth, sample);
         sample.rays.add_bounces(&bounces);
         let lights = sample.lights;
         let mut shadows = 0;
@@ -209,9 +229,27 @@ impl<'a> Whitted<'a> {
         color
     }
 
-    /// The refracted and reflected rays of `ray`'s hit at `surface`; none at the depth limit. A rough
-    /// material's mirror direction is perturbed within a ball of its roughness, drawn from `rng`.
-    pub fn bounces(&self, ray: &Ray, surface: &Surface, depth: u32, rng: &mut Sampler) -> Bounces {
+    /// The refracted and reflected rays of `ray`'s hit at `surface`; none at the depth limit, and only
+    /// the heavier one once `sample` has spent its [`SPLIT_BUDGET`]. A rough material's mirror
+    /// direction is perturbed within a ball of its roughness, drawn from the sample's generator.
+    pub fn bounces(&self, ray: &Ray, surface: &Surface, depth: u32, sample: &mut PixelSample) -> Bounces {
+        let mut out = self.split(ray, surface, depth, &mut sample.rng);
+        let spent = sample.rays.reflected + sample.rays.refracted;
+        if let (Some((_, t)), Some((_, r))) = (out.refracted, out.reflected) {
+            if spent >= SPLIT_BUDGET {
+                // On a tie the mirror ray goes on: it is the one a total internal reflection keeps.
+                if t > r {
+                    out.reflected = None;
+                } else {
+                    out.refracted = None;
+                }
+            }
+        }
+        out
+    }
+
+    /// Both rays a hit spawns, before the split budget.
+    fn split(&self, ray: &Ray, surface: &Surface, depth: u32, rng: &mut Sampler) -> Bounces {
         let mut out = Bounces::default();
         if depth >= self.max_depth {
             return out;
@@ -219,7 +257,7 @@ impl<'a> Whitted<'a> {
         let m = &self.scene.materials[surface.material as usize];
         let (p, ng, ns) = (surface.point, surface.geometric, surface.shading);
         // Fresnel splits light between the mirror and the refracted ray; opaque surfaces reflect Ks.
-        let mut kr = 1.0;
+        let (mut kr, mut total_internal) = (1.0, false);
         if m.transmission > 0.0 {
             let (eta_i, eta_t) = if surface.inside {
                 (m.ior, 1.0)
@@ -235,9 +273,15 @@ impl<'a> Whitted<'a> {
                 }
             } else {
                 kr = 1.0;
+                total_internal = true;
             }
         }
-        let weight = m.ks * kr;
+        let weight = if total_internal && self.spd {
+            // The SPD rule: the light that found no way out is all reflected, whatever Ks says.
+            m.ks + m.transmission
+        } else {
+            m.ks * kr
+        };
         if weight > 0.0 {
             let mirror = reflect(ray.dir, ns).normalize();
             let roughness = self.roughness[surface.material as usize];

@@ -17,12 +17,45 @@ pub use store::*;
 use crate::error::{Error, Result};
 
 /// An indexed triangle mesh as read from a PLY or OBJ file (polygons already triangulated).
+///
+/// Normals have their own index space because OBJ faces index positions and normals separately (PLY's
+/// per-vertex normals share the position indices). A zero entry of `normals` stands for "no normal": PLY
+/// exporters write `0 0 0` where they have none, so such a vertex makes its faces flat rather than failing
+/// the whole file.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct MeshData {
     /// Vertex positions.
     pub positions: Vec<Vec3>,
     /// Triangles as indices into `positions`, each checked to be in range.
     pub triangles: Vec<[u32; 3]>,
+    /// Unit shading normals, or zero where the file's normal had no length.
+    pub normals: Vec<Vec3>,
+    /// The corners' indices into `normals` for each triangle, `None` for a flat one (a face where some corner
+    /// has no normal, or a zero one). Empty when no triangle has normals (so meshes without them pay
+    /// nothing); otherwise parallel to `triangles`.
+    pub normal_triangles: Vec<Option<[u32; 3]>>,
+}
+
+impl MeshData {
+    /// Records the corner normals of the triangle just pushed onto `triangles`.
+    fn push_normals(&mut self, normals: Option<[u32; 3]>) {
+        if normals.is_some() || !self.normal_triangles.is_empty() {
+            // The first smooth triangle gives every flat one before it its `None`.
+            self.normal_triangles.resize(self.triangles.len() - 1, None);
+            self.normal_triangles.push(normals);
+        }
+    }
+}
+
+/// `n` scaled to unit length, or zero if it has none. Dividing by the largest component first keeps
+/// huge and tiny (subnormal) normals from overflowing or underflowing in the length.
+fn unit_normal(n: Vec3) -> Vec3 {
+    let largest = n.abs().max_element();
+    if largest > 0.0 {
+        (n / largest).normalize()
+    } else {
+        Vec3::ZERO
+    }
 }
 
 /// The kinds of file `whitted` reads, told apart by extension (a `.gz` suffix is looked through).

@@ -1,42 +1,49 @@
 //! Wavefront OBJ meshes, gzipped or not.
 //!
-//! Only vertex positions (`v`) and faces (`f`) matter to a ray tracer without textures; every other
-//! statement (texture coordinates, normals, groups, materials, lines...) is skipped to the end of its line.
+//! Vertex positions (`v`), normals (`vn`) and faces (`f`) are what a ray tracer without textures uses; every
+//! other statement (texture coordinates, groups, materials, lines...) is skipped to the end of its line.
 //! OBJ is line oriented, so a statement ends where the next token starts a later line.
 
 use std::path::Path;
 
 use glam::Vec3;
 
-use super::MeshData;
 use super::lex::{self, Lexer, Tok, show};
 use super::ply::Polygons;
+use super::{MeshData, unit_normal};
 use crate::error::{Error, Result};
 
 /// Loads an OBJ mesh (gzipped or not), triangulating its polygons.
 ///
-/// Face references `i`, `i/t`, `i//n` and `i/t/n` are accepted; only the position index `i` is used. It is
-/// 1-based, or negative to count back from the last vertex read so far (-1 is the last one). Errors say
-/// `path:line:col`.
+/// Face references `i`, `i/t`, `i//n` and `i/t/n` are accepted; the position index `i` and the normal index
+/// `n` are used. Each is 1-based, or negative to count back from the last vertex (or normal) read so far (-1
+/// is the last one). A face is smooth if every corner names a normal and none of those is zero, else flat.
+/// Errors say `path:line:col`.
 pub fn load(path: &Path) -> Result<MeshData> {
     let mut lx = Lexer::open(path)?;
     let mut mesh = MeshData::default();
     let mut polygons = Polygons::default();
-    let mut face: Vec<u32> = Vec::new();
+    let mut face = Face::default();
     while let Some(tok) = lx.next_token()? {
         match lx.text(&tok) {
             b"v" => {
-                // Indices are u32: a vertex beyond that could not be referenced.
-                if mesh.positions.len() > u32::MAX as usize {
-                    return Err(lx.error_at(&tok, "expected at most 4294967296 vertices, found more"));
-                }
-                mesh.positions.push(read_vertex(&mut lx, &tok)?);
+                check_room(&lx, &tok, mesh.positions.len())?;
+                let p = read_triple(&mut lx, &tok, ["coordinates", "coordinate"])?;
+                mesh.positions.push(p);
                 // An optional w (and anything after it) does not matter.
                 lx.skip_line()?;
             }
+            b"vn" => {
+                check_room(&lx, &tok, mesh.normals.len())?;
+                let n = read_triple(&mut lx, &tok, ["normal components", "normal component"])?;
+                mesh.normals.push(unit_normal(n));
+                lx.skip_line()?;
+            }
             b"f" => {
-                read_face(&mut lx, &tok, mesh.positions.len(), &mut face)?;
-                polygons.push(&mesh.positions, &face, &mut mesh.triangles);
+                read_face(&mut lx, &tok, &mesh, &mut face)?;
+                // Corners without normals beside ones with: the face is flat, as if none had one.
+                let normals = (face.normals.len() == face.positions.len()).then_some(&face.normals[..]);
+                polygons.push(&mut mesh, &face.positions, normals);
             }
             _ => lx.skip_line()?,
         }
@@ -50,6 +57,27 @@ pub fn load(path: &Path) -> Result<MeshData> {
     Ok(mesh)
 }
 
+/// The corners of one face, as 0-based indices; `normals` holds those of the corners that name one.
+#[derive(Default)]
+struct Face {
+    positions: Vec<u32>,
+    normals: Vec<u32>,
+}
+
+/// Checks that a `v` or `vn` (the keyword `tok`) after `len` others can still be referenced: indices are u32.
+fn check_room(lx: &Lexer, tok: &Tok, len: usize) -> Result<()> {
+    if len > u32::MAX as usize {
+        return Err(lx.error_at(
+            tok,
+            format!(
+                "expected at most 4294967296 {} lines, found more",
+                show(lx.text(tok))
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// The next token if it is on `line`: a statement ends with its line.
 fn next_on(lx: &mut Lexer, line: u32) -> Result<Option<Tok>> {
     match lx.peek()? {
@@ -58,22 +86,26 @@ fn next_on(lx: &mut Lexer, line: u32) -> Result<Option<Tok>> {
     }
 }
 
-/// The x, y, z after `v` (the keyword).
-fn read_vertex(lx: &mut Lexer, v: &Tok) -> Result<Vec3> {
+/// The x, y, z after the keyword `v` or `vn`, named `nouns` (plural, singular) in errors.
+fn read_triple(lx: &mut Lexer, keyword: &Tok, [plural, noun]: [&str; 2]) -> Result<Vec3> {
     let mut p = Vec3::ZERO;
     for (axis, name) in ["x", "y", "z"].into_iter().enumerate() {
-        let Some(tok) = next_on(lx, v.line)? else {
-            return Err(lx.error_at(v, format!("expected 3 coordinates after \"v\", found {axis}")));
+        let Some(tok) = next_on(lx, keyword.line)? else {
+            let keyword_text = show(lx.text(keyword));
+            return Err(lx.error_at(
+                keyword,
+                format!("expected 3 {plural} after {keyword_text}, found {axis}"),
+            ));
         };
         let text = lx.text(&tok);
         match lex::parse_f32(text) {
-            // NaN and infinities would poison the bounding boxes and every ray that meets them.
+            // NaN and infinities would poison the bounding boxes, the shading and every ray that meets them.
             Some(value) if value.is_finite() => p[axis] = value,
             Some(_) => {
                 return Err(lx.error_at(
                     &tok,
                     format!(
-                        "expected a finite number for the {name} coordinate, found {}",
+                        "expected a finite number for the {name} {noun}, found {}",
                         show(text)
                     ),
                 ));
@@ -81,10 +113,7 @@ fn read_vertex(lx: &mut Lexer, v: &Tok) -> Result<Vec3> {
             None => {
                 return Err(lx.error_at(
                     &tok,
-                    format!(
-                        "expected a number for the {name} coordinate, found {}",
-                        show(text)
-                    ),
+                    format!("expected a number for the {name} {noun}, found {}", show(text)),
                 ));
             }
         }
@@ -92,56 +121,82 @@ fn read_vertex(lx: &mut Lexer, v: &Tok) -> Result<Vec3> {
     Ok(p)
 }
 
-/// The vertex references after `f` (the keyword) into `face`, as 0-based indices below `vertex_count`.
-fn read_face(lx: &mut Lexer, f: &Tok, vertex_count: usize, face: &mut Vec<u32>) -> Result<()> {
-    face.clear();
+/// The vertex references after `f` (the keyword) into `face`, resolved against what `mesh` has so far.
+fn read_face(lx: &mut Lexer, f: &Tok, mesh: &MeshData, face: &mut Face) -> Result<()> {
+    face.positions.clear();
+    face.normals.clear();
     while let Some(tok) = next_on(lx, f.line)? {
-        face.push(vertex_ref(lx, &tok, vertex_count)?);
+        let (position, normal) = vertex_ref(lx, &tok, mesh)?;
+        face.positions.push(position);
+        face.normals.extend(normal);
     }
-    if face.len() < 3 {
+    if face.positions.len() < 3 {
         return Err(lx.error_at(
             f,
-            format!("expected 3 or more vertices after \"f\", found {}", face.len()),
+            format!(
+                "expected 3 or more vertices after \"f\", found {}",
+                face.positions.len()
+            ),
         ));
     }
     Ok(())
 }
 
-/// One `i`, `i/t`, `i//n` or `i/t/n` reference, resolved to a 0-based vertex index.
-fn vertex_ref(lx: &Lexer, tok: &Tok, vertex_count: usize) -> Result<u32> {
+/// One `i`, `i/t`, `i//n` or `i/t/n` reference, resolved to a 0-based position index and, for the forms
+/// that have one, a 0-based normal index.
+fn vertex_ref(lx: &Lexer, tok: &Tok, mesh: &MeshData) -> Result<(u32, Option<u32>)> {
     let text = lx.text(tok);
     let mut parts = text.split(|&b| b == b'/');
-    let position = parts.next().and_then(lex::parse_int);
-    let is_int = |part: &[u8]| lex::parse_int(part).is_some();
-    // The texture and normal indices are not used, but a malformed reference is still an error.
-    let well_formed = match (parts.next(), parts.next(), parts.next()) {
-        (None, _, _) => true,
-        (Some(t), None, _) => is_int(t),
-        (Some(t), Some(n), None) => (t.is_empty() || is_int(t)) && is_int(n),
-        _ => false,
+    let int = lex::parse_int;
+    // The texture index is not used, but a malformed reference is still an error.
+    let parsed = match (
+        parts.next().and_then(int),
+        parts.next(),
+        parts.next(),
+        parts.next(),
+    ) {
+        (Some(i), None, _, _) => Some((i, None)),
+        (Some(i), Some(t), None, _) if int(t).is_some() => Some((i, None)),
+        (Some(i), Some(t), Some(n), None) if t.is_empty() || int(t).is_some() => int(n).map(|n| (i, Some(n))),
+        _ => None,
     };
-    let index = match position {
-        Some(index) if well_formed => index,
-        _ => {
-            return Err(lx.error_at(
-                tok,
-                format!(
-                    "expected a vertex reference (i, i/t, i//n or i/t/n), found {}",
-                    show(text)
-                ),
-            ));
-        }
-    };
-    let n = vertex_count as i64;
-    // 0 is neither a 1-based nor a relative index; it resolves to `n`, out of range like the others.
-    let resolved = if index > 0 { index - 1 } else { n + index };
-    if !(0..n).contains(&resolved) {
+    let Some((index, normal)) = parsed else {
         return Err(lx.error_at(
             tok,
-            format!("expected a vertex index between 1 and {n} (or -{n}..-1), found {index}"),
+            format!(
+                "expected a vertex reference (i, i/t, i//n or i/t/n), found {}",
+                show(text)
+            ),
         ));
-    }
-    Ok(resolved as u32)
+    };
+    let position = resolve(index, mesh.positions.len()).ok_or_else(|| {
+        let n = mesh.positions.len();
+        lx.error_at(
+            tok,
+            format!("expected a vertex index between 1 and {n} (or -{n}..-1), found {index}"),
+        )
+    })?;
+    let normal = match normal {
+        None => None,
+        Some(index) => Some(resolve(index, mesh.normals.len()).ok_or_else(|| {
+            let n = mesh.normals.len();
+            let message = if n == 0 {
+                format!("expected a \"vn\" line before normal index {index}, found none")
+            } else {
+                format!("expected a normal index between 1 and {n} (or -{n}..-1), found {index}")
+            };
+            lx.error_at(tok, message)
+        })?),
+    };
+    Ok((position, normal))
+}
+
+/// A 1-based or negative (relative) OBJ index into a list of `count` items, as a 0-based one if in range. 0
+/// is neither: it resolves to `count`, out of range like the others.
+fn resolve(index: i64, count: usize) -> Option<u32> {
+    let n = count as i64;
+    let resolved = if index > 0 { index - 1 } else { n + index };
+    (0..n).contains(&resolved).then_some(resolved as u32)
 }
 
 #[cfg(test)]
@@ -203,7 +258,8 @@ mod tests {
     #[test]
     fn reference_forms_and_negative_indices() {
         let text = format!(
-            "{SQUARE}f 1/1/1 2/2/2 3/3/3\nf 1//1 3//3 4//4\nf 2/5 3/6 4/7\nf -4 -3 -2\nv 5 5 5\nf -1 -2/1 -3//2\n"
+            "{SQUARE}vn 1 0 0\nvn 0 1 0\nvn 0 0 1\nvn -1 0 0\n\
+             f 1/1/1 2/2/2 3/3/3\nf 1//1 3//3 4//4\nf 2/5 3/6 4/7\nf -4 -3 -2\nv 5 5 5\nf -1 -2/1 -3//2\n"
         );
         let mesh = load_text(&text).unwrap();
         assert_eq!(mesh.positions.len(), 5);
@@ -211,6 +267,142 @@ mod tests {
             mesh.triangles,
             [[0, 1, 2], [0, 2, 3], [1, 2, 3], [0, 1, 2], [4, 3, 2]]
         );
+        // The last face has a normal on one corner only: flat.
+        assert_eq!(
+            mesh.normal_triangles,
+            [Some([0, 1, 2]), Some([0, 2, 3]), None, None, None]
+        );
+    }
+
+    /// Asserts that `got` are the unit vectors `want` (worked out by hand, to 7 digits).
+    #[track_caller]
+    fn assert_normals(got: &[Vec3], want: &[Vec3]) {
+        assert_eq!(got.len(), want.len(), "{got:?}");
+        for (g, w) in got.iter().zip(want) {
+            assert!((*g - *w).length() < 1e-6, "{got:?} vs {want:?}");
+        }
+    }
+
+    /// `vn` normals are stored at unit length and faces index them apart from the positions (negative
+    /// indices count back from the last `vn`). A face with a corner lacking a normal, or naming a zero one, is
+    /// flat as a whole.
+    #[test]
+    fn normals_smooth_and_flat_faces() {
+        let text = format!(
+            "{SQUARE}vn 0 0 2\nvn 3 0 4\nvn 0 -3 4\nvn 0 0 0\n\
+             f 1//1 2//2 3//3\nf 1 3 4\nf 1//3 3//2 4\nf 1/1/-2 2/1/-3 3/1/-4\nf 1//1 3//2 4//4\n"
+        );
+        let mesh = load_text(&text).unwrap();
+        let unit = [
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(0.6, 0.0, 0.8),
+            Vec3::new(0.0, -0.6, 0.8),
+            Vec3::ZERO,
+        ];
+        assert_normals(&mesh.normals, &unit);
+        assert_eq!(
+            mesh.triangles,
+            [[0, 1, 2], [0, 2, 3], [0, 2, 3], [0, 1, 2], [0, 2, 3]]
+        );
+        assert_eq!(
+            mesh.normal_triangles,
+            [Some([0, 1, 2]), None, None, Some([2, 1, 0]), None]
+        );
+    }
+
+    /// The normal indices of a concave polygon go through the ear clipping with its vertices; a flat face
+    /// before the first smooth one is recorded as flat.
+    #[test]
+    fn polygon_normals_follow_the_triangulation() {
+        let l_shape = "v 0 0 1\nv 2 0 1\nv 2 1 1\nv 1 1 1\nv 1 2 1\nv 0 2 1\n";
+        let normals = "vn 1 0 1\nvn 2 0 1\nvn 3 0 1\nvn 4 0 1\nvn 5 0 1\nvn 6 0 1\n";
+        // Vertex i (1-based) has normal 7 - i.
+        let mesh = load_text(&format!(
+            "{l_shape}{normals}f 1 2 3\nf 1//6 2//5 3//4 4//3 5//2 6//1\n"
+        ))
+        .unwrap();
+        let mut want = vec![[0, 1, 2]];
+        want.extend(polygon(&mesh.positions, 0, 6));
+        assert_eq!(mesh.triangles, want);
+        assert_eq!(mesh.normal_triangles.len(), 5);
+        assert_eq!(mesh.normal_triangles[0], None);
+        for k in 1..5 {
+            assert_eq!(
+                mesh.normal_triangles[k],
+                Some(mesh.triangles[k].map(|i| 5 - i)),
+                "triangle {k}"
+            );
+        }
+    }
+
+    /// Normals are normalised without overflow or underflow in their length.
+    #[test]
+    fn tiny_and_huge_normals() {
+        let mesh = load_text(&format!(
+            "{SQUARE}vn 1e-30 0 0\nvn 3e38 0 -3e38\nf 1//1 2//2 3//2\n"
+        ))
+        .unwrap();
+        let half = std::f32::consts::FRAC_1_SQRT_2;
+        assert_normals(&mesh.normals, &[Vec3::X, Vec3::new(half, 0.0, -half)]);
+        assert_eq!(mesh.normal_triangles, [Some([0, 1, 1])]);
+    }
+
+    #[test]
+    fn normal_errors() {
+        let vn = "vn 0 0 1\nvn 0 1 0\n";
+        let face_error = |face: &str| load_text(&format!("{SQUARE}{vn}{face}\n")).unwrap_err();
+        let e = face_error("f 1//1 2//3 3//1");
+        assert_eq!(
+            e.message,
+            "expected a normal index between 1 and 2 (or -2..-1), found 3"
+        );
+        assert_eq!(e.location, Location::LineCol(7, 8));
+        let e = face_error("f 1//1 2//2 3/4/-3");
+        assert_eq!(
+            e.message,
+            "expected a normal index between 1 and 2 (or -2..-1), found -3"
+        );
+        assert_eq!(e.location, Location::LineCol(7, 13));
+        let e = face_error("f 1//0 2//1 3//1");
+        assert!(e.message.ends_with("found 0"), "{e}");
+        let e = face_error("f 1//x 2//1 3//1");
+        assert!(e.message.starts_with("expected a vertex reference"), "{e}");
+        // Normal indices count the `vn` lines before the face, as vertex indices count the `v` lines.
+        let e = load_text(&format!("{SQUARE}f 1//1 2//1 3//1\n{vn}")).unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected a \"vn\" line before normal index 1, found none"
+        );
+        assert_eq!(e.location, Location::LineCol(5, 3));
+        let e = load_text(&format!("{SQUARE}vn 0 0 1\nf 1//1 2//1 3//2\nvn 0 1 0\n")).unwrap_err();
+        assert_eq!(
+            e.message,
+            "expected a normal index between 1 and 1 (or -1..-1), found 2"
+        );
+        assert_eq!(e.line(), Some(6));
+    }
+
+    #[test]
+    fn normal_value_errors() {
+        let e = error_on_line_5("vn nan 0 1");
+        assert_eq!(
+            e.message,
+            "expected a finite number for the x normal component, found \"nan\""
+        );
+        assert_eq!(e.location, Location::LineCol(5, 4));
+        let e = error_on_line_5("vn 0 0 inf");
+        assert_eq!(
+            e.message,
+            "expected a finite number for the z normal component, found \"inf\""
+        );
+        let e = error_on_line_5("vn 1 x 0");
+        assert_eq!(
+            e.message,
+            "expected a number for the y normal component, found \"x\""
+        );
+        let e = error_on_line_5("vn 1 0");
+        assert_eq!(e.message, "expected 3 normal components after \"vn\", found 2");
+        assert_eq!(e.location, Location::LineCol(5, 1));
     }
 
     #[test]
@@ -241,6 +433,8 @@ frobnicate 1 2 3 4
                 Vec3::new(7.0, 8.0, 9.0),
             ],
             triangles: vec![[0, 1, 2]],
+            normals: vec![Vec3::Z],
+            normal_triangles: vec![Some([0, 0, 0])],
         };
         assert_eq!(load_text(text).unwrap(), want);
         let mut gz = GzEncoder::new(Vec::new(), Compression::default());

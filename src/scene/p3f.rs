@@ -1,6 +1,6 @@
 //! The `.p3f` / NFF scene parser: one function per keyword, reading tokens (never lines) from the
 //! streaming [`Lexer`], so a polygon may spread over any number of lines and a 3 MB scene never sits in
-//! memory as text. The grammar is `shared/formats/p3f.md` (Haines' NFF plus the course's extensions).
+//! memory as text. The grammar is `docs/scene-format.md` (Haines' NFF plus the course's extensions).
 
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -59,7 +59,7 @@ pub fn scene_around_mesh(mesh: &MeshData) -> Scene {
     scene.add_point_light(center + Vec3::new(1.0, 2.0, 1.5) * diag, Vec3::ONE);
     let material = scene.add_material(Material::default());
     scene
-        .add_mesh(&mesh.positions, &mesh.triangles, material)
+        .add_mesh(mesh, material)
         .expect("mesh loaders check their indices");
     scene
 }
@@ -568,9 +568,16 @@ impl Parser {
         for p in &mut mesh.positions {
             *p = *p * scale + translate;
         }
+        // Normals transform by the inverse transpose, 1/S here: a uniform scale keeps their direction, a
+        // negative one (a point reflection) reverses it.
+        if scale < 0.0 {
+            for n in &mut mesh.normals {
+                *n = -*n;
+            }
+        }
         let m = self.current_material();
         self.scene
-            .add_mesh(&mesh.positions, &mesh.triangles, m)
+            .add_mesh(&mesh, m)
             .map_err(|e| self.lx.error_at(&tok, e.message))
     }
 }

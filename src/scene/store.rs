@@ -8,8 +8,10 @@ use std::path::PathBuf;
 
 use glam::Vec3;
 
+use super::MeshData;
 use crate::error::{Error, Result};
 use crate::geometry::aabb::Aabb;
+use crate::geometry::length_and_direction;
 
 /// Index into [`Scene::materials`].
 pub type MaterialId = u32;
@@ -85,7 +87,7 @@ pub struct Triangles {
     pub material: Vec<MaterialId>,
     /// Index into `vertex_normals`, or [`NO_NORMALS`].
     pub normals: Vec<u32>,
-    /// Per-vertex normals of the triangles that have them (`pp` patches).
+    /// Per-vertex normals of the triangles that have them (`pp` patches, meshes with normals).
     pub vertex_normals: Vec<[Vec3; 3]>,
 }
 
@@ -110,6 +112,12 @@ impl Triangles {
     pub fn is_degenerate(&self, i: usize) -> bool {
         self.e1.get(i).cross(self.e2.get(i)).length_squared() == 0.0
     }
+}
+
+/// The points `tri` indexes, if every index is in range.
+fn corners(points: &[Vec3], tri: &[u32; 3]) -> Option<[Vec3; 3]> {
+    let [a, b, c] = tri.map(|i| points.get(i as usize).copied());
+    Some([a?, b?, c?])
 }
 
 /// Axis-aligned boxes.
@@ -268,16 +276,28 @@ impl Camera {
     pub fn validate(&self) -> std::result::Result<(), CameraError> {
         let fail = |field, message: String| Err(CameraError { field, message });
         let dir = self.at - self.from;
-        if dir.length_squared() <= f32::MIN_POSITIVE {
+        if !dir.is_finite() {
+            return fail(
+                "at",
+                format!(
+                    "\"from\" {} and \"at\" {} are too far apart: their distance overflows single precision",
+                    fmt_vec(self.from),
+                    fmt_vec(self.at)
+                ),
+            );
+        }
+        if dir == Vec3::ZERO {
             return fail(
                 "at",
                 format!("\"from\" and \"at\" are the same point {}", fmt_vec(self.from)),
             );
         }
-        if self.up.length_squared() <= f32::MIN_POSITIVE {
+        if self.up == Vec3::ZERO {
             return fail("up", "\"up\" is the zero vector".into());
         }
-        if dir.normalize().cross(self.up.normalize()).length() < 1e-6 {
+        // Directions scaled before they are squared: a camera 2e19 units from its target is fine.
+        let (forward, up) = (length_and_direction(dir).1, length_and_direction(self.up).1);
+        if forward.cross(up).length() < 1e-6 {
             return fail(
                 "up",
                 format!(
@@ -451,28 +471,41 @@ impl Scene {
         self.triangles.vertex_normals.push(n);
     }
 
-    /// Adds the triangles of an indexed mesh, checking every index.
-    pub fn add_mesh(
-        &mut self,
-        positions: &[Vec3],
-        triangles: &[[u32; 3]],
-        material: MaterialId,
-    ) -> Result<()> {
+    /// Adds the triangles of an indexed mesh, checking every index. Triangles with normals become smooth
+    /// ones ([`Scene::add_smooth_triangle`]); the loaders store those normals at unit length.
+    pub fn add_mesh(&mut self, mesh: &MeshData, material: MaterialId) -> Result<()> {
+        let count = mesh.triangles.len();
+        if !(mesh.normal_triangles.is_empty() || mesh.normal_triangles.len() == count) {
+            return Err(Error::msg(format!(
+                "mesh has normals for {} triangles, expected none or all {count}",
+                mesh.normal_triangles.len()
+            )));
+        }
         let t = &mut self.triangles;
-        t.v0.reserve(triangles.len());
-        t.e1.reserve(triangles.len());
-        t.e2.reserve(triangles.len());
-        t.material.reserve(triangles.len());
-        t.normals.reserve(triangles.len());
-        for (k, tri) in triangles.iter().enumerate() {
-            let [a, b, c] = tri.map(|i| positions.get(i as usize).copied());
-            let (Some(a), Some(b), Some(c)) = (a, b, c) else {
+        t.v0.reserve(count);
+        t.e1.reserve(count);
+        t.e2.reserve(count);
+        t.material.reserve(count);
+        t.normals.reserve(count);
+        for (k, tri) in mesh.triangles.iter().enumerate() {
+            let Some([a, b, c]) = corners(&mesh.positions, tri) else {
                 return Err(Error::msg(format!(
                     "mesh triangle {k} has a vertex index out of range 0..{}: {tri:?}",
-                    positions.len()
+                    mesh.positions.len()
                 )));
             };
-            self.add_triangle(a, b, c, material);
+            match mesh.normal_triangles.get(k).copied().flatten() {
+                None => self.add_triangle(a, b, c, material),
+                Some(normals) => {
+                    let Some(n) = corners(&mesh.normals, &normals) else {
+                        return Err(Error::msg(format!(
+                            "mesh triangle {k} has a normal index out of range 0..{}: {normals:?}",
+                            mesh.normals.len()
+                        )));
+                    };
+                    self.add_smooth_triangle([a, b, c], n, material);
+                }
+            }
         }
         Ok(())
     }

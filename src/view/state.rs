@@ -402,6 +402,11 @@ impl ViewState {
         self.held.contains(&true) || self.moving()
     }
 
+    /// The scene file's camera at the starting size.
+    pub fn file_camera(&self) -> Camera {
+        self.file
+    }
+
     /// The settings.
     pub fn settings(&self) -> Settings {
         self.settings

@@ -29,7 +29,7 @@ use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
 use super::state::{Input, Job, Key, Settings, ViewState};
-use super::{Config, Frame, Signals, render_loop};
+use super::{Config, Frame, Signals, render_loop, reproduce};
 use crate::accel::AccelKind;
 use crate::error::{Error, Result};
 use crate::render::Kernel;
@@ -273,7 +273,8 @@ impl App<'_> {
         }
     }
 
-    /// Saves the frame on screen as the first free `NAME-view-K.png` of the current directory.
+    /// Saves the frame on screen as the first free `NAME-view-K.png` of the current directory, and
+    /// prints its camera as a `v` block and the `whitted render` command of the same image.
     fn save(&self) -> Result<()> {
         let Some(frame) = &self.frame else {
             return Ok(());
@@ -294,6 +295,10 @@ impl App<'_> {
             frame.pass,
             if frame.pass == 1 { "" } else { "es" }
         );
+        let scene = self.config.scene.as_deref();
+        let file = self.state.file_camera();
+        let command = reproduce::render_command(scene, &file, &frame.job, frame.pass, self.config.srgb);
+        eprintln!("{}{command}", reproduce::view_block(&frame.job.camera));
         Ok(())
     }
 

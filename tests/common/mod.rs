@@ -9,15 +9,28 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// `../shared`, if it is there; tests that need it skip (saying so) when it is not.
-pub fn shared() -> Option<PathBuf> {
-    let p = root().join("../shared");
-    if p.join("scenes").is_dir() {
-        Some(p)
-    } else {
-        eprintln!("skipped: ../shared is not beside the checkout");
-        None
+/// True if the optional program `program` runs (`program --version`, or `probe` as its arguments).
+/// When it does not, the test that asked says so and passes without having run, except under CI:
+/// `.ci/run` installs every such program and sets `WHITTED_REQUIRE_ALL=1`, which turns the skip into
+/// a failure, so a green CI run has run every test.
+pub fn have(program: &str, probe: &[&str], install: &str) -> bool {
+    let runs = Command::new(program)
+        .args(if probe.is_empty() {
+            &["--version"][..]
+        } else {
+            probe
+        })
+        .output()
+        .is_ok();
+    if !runs {
+        let why = format!("`{program}` is not installed ({install} to run this test)");
+        assert!(
+            std::env::var_os("WHITTED_REQUIRE_ALL").is_none(),
+            "{why}; WHITTED_REQUIRE_ALL is set, so this test must run"
+        );
+        eprintln!("skipped: {why}");
     }
+    runs
 }
 
 /// Runs the `whitted` binary.

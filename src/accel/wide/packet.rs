@@ -35,11 +35,10 @@ use std::marker::PhantomData;
 use super::lanes::{Lanes, OnLanes8, SlabRays, slab};
 use super::traverse::sort_far_to_near;
 use super::{ChildRef, EMPTY, LEAF, STACK, WideBvh};
-use crate::accel::packet::{PACKET, bits};
+use crate::accel::packet::{HitPacket, PACKET, RayPacket, bits};
 use crate::accel::policy::HitPolicy;
-use crate::accel::prims::Hit;
 use crate::accel::stack::Stack;
-use crate::geometry::ray::{CULL_MARGIN, Ray};
+use crate::geometry::ray::CULL_MARGIN;
 
 /// A stack entry: a child, the mask of the rays that entered it, their entry distances, and the entry
 /// of the first of them (the key that orders a node's children).
@@ -67,10 +66,10 @@ impl<const W: usize> WideBvh<'_, W> {
     #[inline]
     pub fn traverse_packet<P: HitPolicy>(
         &self,
-        rays: &[Ray; PACKET],
+        rays: &RayPacket,
         active: u8,
         t_min: f32,
-        hits: &mut [Hit; PACKET],
+        hits: &mut HitPacket,
     ) -> u8 {
         self.isa.run8(Packet::<P, W> {
             bvh: self,
@@ -86,10 +85,10 @@ impl<const W: usize> WideBvh<'_, W> {
 /// The packet kernel as a computation over eight lanes, for [`super::lanes::Isa::run8`].
 struct Packet<'r, 'b, P, const W: usize> {
     bvh: &'r WideBvh<'b, W>,
-    rays: &'r [Ray; PACKET],
+    rays: &'r RayPacket,
     active: u8,
     t_min: f32,
-    hits: &'r mut [Hit; PACKET],
+    hits: &'r mut HitPacket,
     policy: PhantomData<P>,
 }
 
@@ -123,7 +122,7 @@ impl<P: HitPolicy, const W: usize> OnLanes8 for Packet<'_, '_, P, W> {
         let lo = L::splat(t_min);
         let margin = L::splat(CULL_MARGIN);
         // The rays' hit distances, kept in lanes beside `hits`.
-        let limits = |hits: &[Hit; PACKET]| {
+        let limits = |hits: &HitPacket| {
             let mut t = [0.0; PACKET];
             for (t, h) in t.iter_mut().zip(hits) {
                 *t = h.t;
@@ -212,8 +211,10 @@ mod tests {
 
     use super::*;
     use crate::accel::policy::{AnyHit, Closest};
+    use crate::accel::prims::Hit;
     use crate::accel::prims::Prims;
     use crate::accel::wide::Bvh4;
+    use crate::geometry::ray::Ray;
     use crate::geometry::ray::testing::TestRng;
     use crate::render::camera::RayCamera;
     use crate::scene::Scene;
@@ -232,7 +233,7 @@ mod tests {
     /// in its hit-or-miss answer; inactive lanes untouched. Returns the packet's hits and found mask.
     fn check<P: HitPolicy>(
         bvh: &Bvh4,
-        rays: &[Ray; PACKET],
+        rays: &RayPacket,
         active: u8,
         t_min: f32,
         t_max: [f32; PACKET],
@@ -294,7 +295,7 @@ mod tests {
     /// ray came from, each limited to the light's distance; misses are inactive.
     fn shadow_packet(
         bvh: &Bvh4,
-        rays: &[Ray; PACKET],
+        rays: &RayPacket,
         hits: &[Hit; PACKET],
         found: u8,
         light: Vec3,

@@ -1,13 +1,7 @@
-//! Parts of a frame rendered apart (on the nodes of a cluster, by the jobs of an array) and merged into
-//! the one image a single machine would have made.
+//! The `.partial` file: one part's sums of its passes, headed by every setting that changes the image,
+//! so that parts of different renders are never merged.
 //!
-//! A part is a subset of the frame's tiles ([`tiles::part`], `--tiles K/N`) over a range of its passes
-//! (`--passes-range A..B`: passes A to B−1, counted from 0). Since a pixel's random numbers depend only
-//! on (seed, pixel, pass) ([`super::sampler`]), a part's pixels are exactly those the whole render
-//! computes, and since parts keep `f64` sums rather than means ([`Progressive`]), merging adds them up
-//! to the whole render's sums.
-//!
-//! # The `.partial` file (version 1)
+//! # Version 1
 //! Little-endian throughout:
 //!
 //! | bytes | field |
@@ -27,15 +21,17 @@
 //! Reading checks the magic, the version, the length the header implies, the checksum and every
 //! field's range, so a truncated, bit-flipped or foreign file is named and refused, never half-used.
 
+use std::io::Read;
 use std::ops::Range;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use super::film::{Film, temporary_name};
-use super::progressive::{Progressive, area, mean};
-use super::tiles::{self, TILE, Tile};
 use crate::digest;
 use crate::error::{Error, Result};
-use crate::scene::check_resolution;
+use crate::render::Options;
+use crate::render::film::write_atomically;
+use crate::render::progressive::{Progressive, area};
+use crate::render::tiles::{self, TILE};
+use crate::scene::{Scene, check_resolution};
 
 const MAGIC: &[u8; 8] = b"WHTPART\n";
 const VERSION: u32 = 1;
@@ -70,8 +66,25 @@ pub struct Settings {
 }
 
 impl Settings {
+    /// The settings of a render of `scene` (its camera's lens included, after any override) with
+    /// `options`, in `passes` passes of `options.spp` samples each.
+    pub fn new(scene: &Scene, options: &Options, passes: u32) -> Self {
+        Settings {
+            scene: scene.fingerprint(),
+            width: options.width,
+            height: options.height,
+            spp: options.spp,
+            seed: options.seed,
+            max_depth: options.max_depth,
+            aperture: scene.camera.aperture,
+            focal: scene.camera.focal,
+            roughness: options.roughness,
+            passes,
+        }
+    }
+
     /// The fields in which `self` and `other` differ, as `name a vs b`.
-    fn differences(&self, other: &Settings) -> Vec<String> {
+    pub(super) fn differences(&self, other: &Settings) -> Vec<String> {
         let mut out = Vec::new();
         let mut check = |name: &str, a: String, b: String| {
             if a != b {
@@ -189,24 +202,120 @@ impl Part {
 
     /// Writes the part to `path` (under a temporary name first, then renamed: never half a file).
     pub fn write(&self, path: &Path) -> Result<()> {
-        let tmp = temporary_name(path);
-        std::fs::write(&tmp, self.to_bytes())
-            .and_then(|()| std::fs::rename(&tmp, path))
-            .map_err(|e| {
-                let _ = std::fs::remove_file(&tmp);
-                Error::file(path, format!("cannot write the partial file: {e}"))
-            })
+        write_atomically(path, |tmp| {
+            std::fs::write(tmp, self.to_bytes()).map_err(|e| e.to_string())
+        })
+        .map_err(|e| Error::file(path, format!("cannot write the partial file: {e}")))
     }
 
-    /// Reads and checks a part written by [`Part::write`].
+    /// Reads and checks a part written by [`Part::write`]. The header and the tile list are read first
+    /// and the length they imply is compared with the file's before the pixels are read, so that a
+    /// device such as `/dev/zero` (refused by its type), a truncated file or one much longer than its
+    /// header describes is named without being read into memory.
     pub fn read(path: &Path) -> Result<Part> {
-        let bytes = std::fs::read(path)
-            .map_err(|e| Error::file(path, format!("cannot read the partial file: {e}")))?;
-        Part::from_bytes(&bytes).map_err(|message| Error::file(path, message))
+        read_checked(path).map_err(|message| Error::file(path, message))
     }
 
     /// Parses and checks a part's bytes; the error says what is wrong.
     pub fn from_bytes(bytes: &[u8]) -> std::result::Result<Part, String> {
+        let header = Header::parse(bytes)?;
+        let len = header.file_len(&bytes[HEADER..])?;
+        check_len(bytes.len(), len)?;
+        let body = bytes.len() - 8;
+        let stored = u64::from_le_bytes(bytes[body..].try_into().expect("eight bytes"));
+        let computed = digest::of_bytes(&bytes[..body]);
+        if stored != computed {
+            return Err(format!(
+                "corrupt: checksum {computed:016x} does not match the stored {stored:016x}; render this part again"
+            ));
+        }
+        let Header {
+            settings,
+            first,
+            end,
+            part,
+            count,
+        } = header;
+        if !(first < end && end <= settings.passes) {
+            return Err(format!(
+                "pass range {first}..{end} is not within the render's {} passes",
+                settings.passes
+            ));
+        }
+        if part.0 >= part.1 {
+            return Err(format!("part {}/{} is not a valid K/N", part.0, part.1));
+        }
+        let mut r = Reader { bytes, at: HEADER };
+        let tiles: Vec<u32> = (0..count).map(|_| r.u32()).collect();
+        let pixels = (len - HEADER - 4 * count - 8) / PIXEL;
+        let mut sums = Vec::with_capacity(pixels);
+        let mut counts = Vec::with_capacity(pixels);
+        for _ in 0..pixels {
+            sums.push([r.f64(), r.f64(), r.f64()]);
+            counts.push(r.u32());
+        }
+        if counts.iter().any(|&c| c != end - first) {
+            return Err(format!(
+                "a pixel's pass count differs from its pass range {first}..{end}"
+            ));
+        }
+        Ok(Part {
+            settings,
+            passes: first..end,
+            part,
+            tiles,
+            sums,
+            counts,
+        })
+    }
+}
+
+/// [`Part::read`], its error without the path.
+fn read_checked(path: &Path) -> std::result::Result<Part, String> {
+    let cannot = |e: std::io::Error| format!("cannot read the partial file: {e}");
+    let mut file = std::fs::File::open(path).map_err(cannot)?;
+    let metadata = file.metadata().map_err(cannot)?;
+    if !metadata.is_file() {
+        return Err("is not a regular file (a device, a pipe or a directory), so not a partial file".into());
+    }
+    let len = usize::try_from(metadata.len()).unwrap_or(usize::MAX);
+    // Reads up to `n` more bytes (fewer at the end of the file).
+    let mut bytes = Vec::new();
+    let mut more = |bytes: &mut Vec<u8>, n: usize| {
+        file.by_ref()
+            .take(n as u64)
+            .read_to_end(bytes)
+            .map(drop)
+            .map_err(cannot)
+    };
+    more(&mut bytes, HEADER + 8)?;
+    let header = Header::parse(&bytes)?;
+    more(&mut bytes, 4 * header.count)?;
+    let expected = header.file_len(&bytes[HEADER..])?;
+    check_len(len, expected)?;
+    let rest = expected - bytes.len();
+    more(&mut bytes, rest)?;
+    Part::from_bytes(&bytes)
+}
+
+/// The fixed header of a `.partial` file: the first [`HEADER`] bytes.
+struct Header {
+    settings: Settings,
+    /// The first pass of the part.
+    first: u32,
+    /// One past its last pass.
+    end: u32,
+    /// K of N.
+    part: (u32, u32),
+    /// How many tile indices follow.
+    count: usize,
+}
+
+impl Header {
+    /// Parses the header at the start of `bytes` (which must hold it and the checksum after it) and
+    /// checks what can be checked without the rest: the magic, the version, the resolution, the tile
+    /// size and the tile count.
+    fn parse(bytes: &[u8]) -> std::result::Result<Header, String> {
         if bytes.len() < MAGIC.len() || &bytes[..MAGIC.len()] != MAGIC {
             return Err("not a whitted partial file (it does not start with \"WHTPART\")".into());
         }
@@ -239,19 +348,42 @@ impl Part {
                 "tiles of {tile} pixels; this whitted renders tiles of {TILE}"
             ));
         }
+        let tiles = tiles::tiles(width, height).len();
+        if count > tiles {
+            return Err(format!("{count} tiles, but a {width}x{height} frame has {tiles}"));
+        }
+        let settings = Settings {
+            scene,
+            width,
+            height,
+            spp,
+            seed,
+            max_depth,
+            aperture,
+            focal,
+            roughness,
+            passes,
+        };
+        Ok(Header {
+            settings,
+            first,
+            end,
+            part,
+            count,
+        })
+    }
+
+    /// The length of the whole file, from the header and the tile indices at the start of `rest` (the
+    /// bytes after the header), after checking the indices: in the frame and increasing.
+    fn file_len(&self, rest: &[u8]) -> std::result::Result<usize, String> {
+        let expected = |pixels: usize| HEADER + 4 * self.count + PIXEL * pixels + 8;
+        if rest.len() < 4 * self.count + 8 {
+            return Err(truncated(HEADER + rest.len(), expected(0)));
+        }
+        let (width, height) = (self.settings.width, self.settings.height);
         let grid = tiles::tiles(width, height);
-        if count > grid.len() {
-            return Err(format!(
-                "{count} tiles, but a {width}x{height} frame has {}",
-                grid.len()
-            ));
-        }
-        // Everything the header says, checked for size before anything is read by it.
-        let expected = |pixels: usize| HEADER + 4 * count + PIXEL * pixels + 8;
-        if bytes.len() < expected(0) {
-            return Err(truncated(bytes.len(), expected(0)));
-        }
-        let indices: Vec<u32> = (0..count).map(|_| r.u32()).collect();
+        let mut r = Reader { bytes: rest, at: 0 };
+        let indices: Vec<u32> = (0..self.count).map(|_| r.u32()).collect();
         if let Some(bad) = indices.iter().find(|&&i| i as usize >= grid.len()) {
             return Err(format!(
                 "tile {bad} is outside the {width}x{height} frame's {} tiles",
@@ -261,64 +393,16 @@ impl Part {
         if indices.windows(2).any(|w| w[0] >= w[1]) {
             return Err("tile indices are not increasing".into());
         }
-        let pixels: usize = indices.iter().map(|&i| area(grid[i as usize])).sum();
-        if bytes.len() != expected(pixels) {
-            return Err(if bytes.len() < expected(pixels) {
-                truncated(bytes.len(), expected(pixels))
-            } else {
-                format!(
-                    "{} bytes, but its header describes {}",
-                    bytes.len(),
-                    expected(pixels)
-                )
-            });
-        }
-        let body = bytes.len() - 8;
-        let stored = u64::from_le_bytes(bytes[body..].try_into().expect("eight bytes"));
-        let computed = digest::of_bytes(&bytes[..body]);
-        if stored != computed {
-            return Err(format!(
-                "corrupt: checksum {computed:016x} does not match the stored {stored:016x}; render this part again"
-            ));
-        }
-        if !(first < end && end <= passes) {
-            return Err(format!(
-                "pass range {first}..{end} is not within the render's {passes} passes"
-            ));
-        }
-        if part.0 >= part.1 {
-            return Err(format!("part {}/{} is not a valid K/N", part.0, part.1));
-        }
-        let mut sums = Vec::with_capacity(pixels);
-        let mut counts = Vec::with_capacity(pixels);
-        for _ in 0..pixels {
-            sums.push([r.f64(), r.f64(), r.f64()]);
-            counts.push(r.u32());
-        }
-        if counts.iter().any(|&c| c != end - first) {
-            return Err(format!(
-                "a pixel's pass count differs from its pass range {first}..{end}"
-            ));
-        }
-        Ok(Part {
-            settings: Settings {
-                scene,
-                width,
-                height,
-                spp,
-                seed,
-                max_depth,
-                aperture,
-                focal,
-                roughness,
-                passes,
-            },
-            passes: first..end,
-            part,
-            tiles: indices,
-            sums,
-            counts,
-        })
+        Ok(expected(indices.iter().map(|&i| area(grid[i as usize])).sum()))
+    }
+}
+
+/// A file of `len` bytes whose header describes `expected`.
+fn check_len(len: usize, expected: usize) -> std::result::Result<(), String> {
+    match len.cmp(&expected) {
+        std::cmp::Ordering::Less => Err(truncated(len, expected)),
+        std::cmp::Ordering::Greater => Err(format!("{len} bytes, but its header describes {expected}")),
+        std::cmp::Ordering::Equal => Ok(()),
     }
 }
 
@@ -354,155 +438,11 @@ impl Reader<'_> {
     }
 }
 
-/// Reads the parts and merges them into the frame, after checking that they are parts of one render
-/// and cover each pixel's passes exactly once; every error names the file(s) at fault.
-pub fn merge(paths: &[PathBuf]) -> Result<Film> {
-    let Some(first_path) = paths.first() else {
-        return Err(Error::msg("no partial files to merge"));
-    };
-    let mut parts = Vec::with_capacity(paths.len());
-    for path in paths {
-        parts.push((path.as_path(), Part::read(path)?));
-    }
-    let settings = parts[0].1.settings;
-    for (path, part) in &parts[1..] {
-        let diff = settings.differences(&part.settings);
-        if !diff.is_empty() {
-            return Err(Error::file(
-                path,
-                format!(
-                    "not a part of the same render as {}: {}",
-                    first_path.display(),
-                    diff.join(", ")
-                ),
-            ));
-        }
-    }
-    check_coverage(&parts, &settings)?;
-
-    // Sum in pass order (then tile order), whatever order the files were named in, so that the
-    // result does not depend on it.
-    parts.sort_by_key(|(_, p)| (p.passes.start, p.tiles.first().copied()));
-    let (w, h) = (settings.width, settings.height);
-    let grid = tiles::tiles(w, h);
-    let mut sums = vec![[0.0f64; 3]; w as usize * h as usize];
-    let mut counts = vec![0u32; sums.len()];
-    for (_, part) in &parts {
-        let mut at = 0;
-        for &i in &part.tiles {
-            let t = grid[i as usize];
-            for y in t.y0..t.y1 {
-                for x in t.x0..t.x1 {
-                    let p = (y * w + x) as usize;
-                    for (s, v) in sums[p].iter_mut().zip(part.sums[at]) {
-                        *s += v;
-                    }
-                    counts[p] += part.counts[at];
-                    at += 1;
-                }
-            }
-        }
-    }
-    let mut film = Film::new(w, h);
-    for ((pixel, sum), n) in film.pixels.iter_mut().zip(&sums).zip(&counts) {
-        *pixel = mean(*sum, f64::from(*n));
-    }
-    Ok(film)
-}
-
-/// Checks that every tile's passes `0..settings.passes` are covered by exactly one part each.
-fn check_coverage(parts: &[(&Path, Part)], settings: &Settings) -> Result<()> {
-    let grid = tiles::tiles(settings.width, settings.height);
-    // Per tile, the pass ranges covering it and the part each came from.
-    let mut cover: Vec<Vec<(Range<u32>, usize)>> = vec![Vec::new(); grid.len()];
-    for (k, (_, part)) in parts.iter().enumerate() {
-        for &i in &part.tiles {
-            cover[i as usize].push((part.passes.clone(), k));
-        }
-    }
-    let mut overlaps: Vec<(usize, usize, Range<u32>)> = Vec::new();
-    // Missing pass ranges, with the tiles they are missing from.
-    let mut gaps: Vec<(Range<u32>, Vec<Tile>)> = Vec::new();
-    for (tile, ranges) in grid.iter().zip(&mut cover) {
-        ranges.sort_by_key(|(r, _)| (r.start, r.end));
-        let mut next = 0;
-        let mut last: Option<usize> = None;
-        let mut missing = |range: Range<u32>| match gaps.iter_mut().find(|(r, _)| *r == range) {
-            Some((_, tiles)) => tiles.push(*tile),
-            None => gaps.push((range, vec![*tile])),
-        };
-        for (range, k) in ranges.iter() {
-            if range.start < next {
-                let pair = (
-                    last.expect("a range before"),
-                    *k,
-                    range.start..next.min(range.end),
-                );
-                if !overlaps.iter().any(|(a, b, _)| (*a, *b) == (pair.0, pair.1)) {
-                    overlaps.push(pair);
-                }
-            } else if range.start > next {
-                missing(next..range.start);
-            }
-            if range.end > next {
-                next = range.end;
-                last = Some(*k);
-            }
-        }
-        if next < settings.passes {
-            missing(next..settings.passes);
-        }
-    }
-    if overlaps.is_empty() && gaps.is_empty() {
-        return Ok(());
-    }
-    let mut problems = Vec::new();
-    for (a, b, range) in overlaps.iter().take(4) {
-        problems.push(format!(
-            "{} and {} overlap (both render passes {}..{} of some tiles)",
-            parts[*a].0.display(),
-            parts[*b].0.display(),
-            range.start,
-            range.end
-        ));
-    }
-    for (range, tiles) in gaps.iter().take(4) {
-        let t = tiles[0];
-        problems.push(format!(
-            "no part renders passes {}..{} of {} tile(s), e.g. pixels x {}..{}, y {}..{}",
-            range.start,
-            range.end,
-            tiles.len(),
-            t.x0,
-            t.x1,
-            t.y0,
-            t.y1
-        ));
-    }
-    let more = overlaps.len().saturating_sub(4) + gaps.len().saturating_sub(4);
-    if more > 0 {
-        problems.push(format!("and {more} more"));
-    }
-    // With every part of one K/N split, name the missing parts: that is what to render again.
-    let n = parts[0].1.part.1;
-    if !gaps.is_empty() && n > 1 && parts.iter().all(|(_, p)| p.part.1 == n) {
-        let missing: Vec<String> = (0..n)
-            .filter(|k| !parts.iter().any(|(_, p)| p.part.0 == *k))
-            .map(|k| format!("{k}/{n}"))
-            .collect();
-        if !missing.is_empty() {
-            problems.push(format!("missing part(s) --tiles {}", missing.join(", ")));
-        }
-    }
-    Err(Error::msg(format!(
-        "the parts do not cover the frame exactly once: {}; nothing written",
-        problems.join("; ")
-    )))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Camera;
+    use glam::Vec3;
 
     fn part() -> Part {
         let settings = Settings {
@@ -527,6 +467,75 @@ mod tests {
             tiles,
             sums: (0..pixels).map(|i| [i as f64, 0.5, -1.0]).collect(),
             counts: vec![2; pixels],
+        }
+    }
+
+    #[test]
+    fn settings_take_the_options_and_the_camera_lens() {
+        let mut scene = Scene::new(Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 45.0, 8, 8));
+        (scene.camera.aperture, scene.camera.focal) = (2.5, 0.75);
+        let options = Options {
+            width: 20,
+            height: 18,
+            spp: 1,
+            seed: 3,
+            roughness: 0.25,
+            ..Options::new(&scene)
+        };
+        let expected = Settings {
+            scene: scene.fingerprint(),
+            width: 20,
+            height: 18,
+            spp: 1,
+            seed: 3,
+            max_depth: 6,
+            aperture: 2.5,
+            focal: 0.75,
+            roughness: 0.25,
+            passes: 4,
+        };
+        assert_eq!(Settings::new(&scene, &options, 4), expected);
+    }
+
+    /// The length the header implies is compared with the file's before its pixels are read: a file
+    /// cut short or far too long, a device and a directory are refused by what they are.
+    #[cfg(unix)]
+    #[test]
+    fn reads_the_header_first_and_refuses_by_type_and_length() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.partial");
+        let bytes = part().to_bytes();
+        // Tiles 1 and 2 of 20x18 hold 4 x 16 + 16 x 2 = 96 pixels: 88 + 2 x 4 + 96 x 28 + 8 bytes.
+        assert_eq!(bytes.len(), 2792);
+        std::fs::write(&path, &bytes).unwrap();
+        assert_eq!(Part::read(&path).unwrap(), part());
+        let refused = |path: &Path| Part::read(path).unwrap_err().to_string();
+        std::fs::write(&path, &bytes[..2000]).unwrap();
+        assert_eq!(
+            refused(&path),
+            format!(
+                "{}: truncated: 2000 bytes where its header describes 2792",
+                path.display()
+            )
+        );
+        std::fs::write(&path, &bytes).unwrap();
+        let file = std::fs::File::options().write(true).open(&path).unwrap();
+        file.set_len(1 << 36).unwrap();
+        assert_eq!(
+            refused(&path),
+            format!(
+                "{}: 68719476736 bytes, but its header describes 2792",
+                path.display()
+            )
+        );
+        for not_a_file in [Path::new("/dev/zero"), dir.path()] {
+            assert_eq!(
+                refused(not_a_file),
+                format!(
+                    "{}: is not a regular file (a device, a pipe or a directory), so not a partial file",
+                    not_a_file.display()
+                )
+            );
         }
     }
 

@@ -1,0 +1,157 @@
+//! Merging the parts of a frame: they must be parts of one render and cover each pixel's passes exactly
+//! once; their sums are then added up in a fixed order, so the image does not depend on the split.
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use super::partial::{Part, Settings};
+use crate::error::{Error, Result};
+use crate::render::film::Film;
+use crate::render::progressive::mean;
+use crate::render::tiles::{self, Tile};
+
+/// Reads the parts and merges them into the frame, after checking that they are parts of one render
+/// and cover each pixel's passes exactly once; every error names the file(s) at fault.
+pub fn merge(paths: &[PathBuf]) -> Result<Film> {
+    let Some(first_path) = paths.first() else {
+        return Err(Error::msg("no partial files to merge"));
+    };
+    let mut parts = Vec::with_capacity(paths.len());
+    for path in paths {
+        parts.push((path.as_path(), Part::read(path)?));
+    }
+    let settings = parts[0].1.settings;
+    for (path, part) in &parts[1..] {
+        let diff = settings.differences(&part.settings);
+        if !diff.is_empty() {
+            return Err(Error::file(
+                path,
+                format!(
+                    "not a part of the same render as {}: {}",
+                    first_path.display(),
+                    diff.join(", ")
+                ),
+            ));
+        }
+    }
+    check_coverage(&parts, &settings)?;
+
+    // Sum in pass order (then tile order), whatever order the files were named in, so that the
+    // result does not depend on it.
+    parts.sort_by_key(|(_, p)| (p.passes.start, p.tiles.first().copied()));
+    let (w, h) = (settings.width, settings.height);
+    let grid = tiles::tiles(w, h);
+    let mut sums = vec![[0.0f64; 3]; w as usize * h as usize];
+    let mut counts = vec![0u32; sums.len()];
+    for (_, part) in &parts {
+        let mut at = 0;
+        for &i in &part.tiles {
+            let t = grid[i as usize];
+            for y in t.y0..t.y1 {
+                for x in t.x0..t.x1 {
+                    let p = (y * w + x) as usize;
+                    for (s, v) in sums[p].iter_mut().zip(part.sums[at]) {
+                        *s += v;
+                    }
+                    counts[p] += part.counts[at];
+                    at += 1;
+                }
+            }
+        }
+    }
+    let mut film = Film::new(w, h);
+    for ((pixel, sum), n) in film.pixels.iter_mut().zip(&sums).zip(&counts) {
+        *pixel = mean(*sum, f64::from(*n));
+    }
+    Ok(film)
+}
+
+/// Checks that every tile's passes `0..settings.passes` are covered by exactly one part each.
+fn check_coverage(parts: &[(&Path, Part)], settings: &Settings) -> Result<()> {
+    let grid = tiles::tiles(settings.width, settings.height);
+    // Per tile, the pass ranges covering it and the part each came from.
+    let mut cover: Vec<Vec<(Range<u32>, usize)>> = vec![Vec::new(); grid.len()];
+    for (k, (_, part)) in parts.iter().enumerate() {
+        for &i in &part.tiles {
+            cover[i as usize].push((part.passes.clone(), k));
+        }
+    }
+    let mut overlaps: Vec<(usize, usize, Range<u32>)> = Vec::new();
+    // Missing pass ranges, with the tiles they are missing from.
+    let mut gaps: Vec<(Range<u32>, Vec<Tile>)> = Vec::new();
+    for (tile, ranges) in grid.iter().zip(&mut cover) {
+        ranges.sort_by_key(|(r, _)| (r.start, r.end));
+        let mut next = 0;
+        let mut last: Option<usize> = None;
+        let mut missing = |range: Range<u32>| match gaps.iter_mut().find(|(r, _)| *r == range) {
+            Some((_, tiles)) => tiles.push(*tile),
+            None => gaps.push((range, vec![*tile])),
+        };
+        for (range, k) in ranges.iter() {
+            if range.start < next {
+                let pair = (
+                    last.expect("a range before"),
+                    *k,
+                    range.start..next.min(range.end),
+                );
+                if !overlaps.iter().any(|(a, b, _)| (*a, *b) == (pair.0, pair.1)) {
+                    overlaps.push(pair);
+                }
+            } else if range.start > next {
+                missing(next..range.start);
+            }
+            if range.end > next {
+                next = range.end;
+                last = Some(*k);
+            }
+        }
+        if next < settings.passes {
+            missing(next..settings.passes);
+        }
+    }
+    if overlaps.is_empty() && gaps.is_empty() {
+        return Ok(());
+    }
+    let mut problems = Vec::new();
+    for (a, b, range) in overlaps.iter().take(4) {
+        problems.push(format!(
+            "{} and {} overlap (both render passes {}..{} of some tiles)",
+            parts[*a].0.display(),
+            parts[*b].0.display(),
+            range.start,
+            range.end
+        ));
+    }
+    for (range, tiles) in gaps.iter().take(4) {
+        let t = tiles[0];
+        problems.push(format!(
+            "no part renders passes {}..{} of {} tile(s), e.g. pixels x {}..{}, y {}..{}",
+            range.start,
+            range.end,
+            tiles.len(),
+            t.x0,
+            t.x1,
+            t.y0,
+            t.y1
+        ));
+    }
+    let more = overlaps.len().saturating_sub(4) + gaps.len().saturating_sub(4);
+    if more > 0 {
+        problems.push(format!("and {more} more"));
+    }
+    // With every part of one K/N split, name the missing parts: that is what to render again.
+    let n = parts[0].1.part.1;
+    if !gaps.is_empty() && n > 1 && parts.iter().all(|(_, p)| p.part.1 == n) {
+        let missing: Vec<String> = (0..n)
+            .filter(|k| !parts.iter().any(|(_, p)| p.part.0 == *k))
+            .map(|k| format!("{k}/{n}"))
+            .collect();
+        if !missing.is_empty() {
+            problems.push(format!("missing part(s) --tiles {}", missing.join(", ")));
+        }
+    }
+    Err(Error::msg(format!(
+        "the parts do not cover the frame exactly once: {}; nothing written",
+        problems.join("; ")
+    )))
+}

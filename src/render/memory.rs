@@ -1,0 +1,120 @@
+//! How much memory a frame needs, and whether this process can have it: checked before anything is
+//! allocated, so that a resolution too large for the machine is refused with the size it would need,
+//! instead of aborting on a failed allocation (or being killed by the kernel) halfway through a render.
+
+use std::fmt::Write;
+
+/// Bytes a pixel takes at the peak of a render written to a file: the passes' `f64` sums (24), the film
+/// of their mean (12), the 8-bit image (3) and the encoder's copy of it (3).
+pub const BYTES_PER_PIXEL: u64 = 42;
+
+/// The bytes a `width` × `height` frame needs at its peak.
+pub fn frame_bytes(width: u32, height: u32) -> u64 {
+    u64::from(width) * u64::from(height) * BYTES_PER_PIXEL
+}
+
+/// Refuses a frame that needs more memory than this process can still use ([`available`]); a
+/// frame whose need cannot be compared (no figure to read) is let through.
+pub fn check(width: u32, height: u32) -> Result<(), String> {
+    check_against(width, height, available())
+}
+
+/// [`check`] against `available` bytes.
+pub fn check_against(width: u32, height: u32, available: Option<u64>) -> Result<(), String> {
+    let need = frame_bytes(width, height);
+    match available {
+        Some(have) if need > have => Err(format!(
+            "a {width}x{height} frame needs {} ({BYTES_PER_PIXEL} bytes a pixel) and only {} is \
+             available: lower the resolution, or render it in parts (--tiles K/N)",
+            gib(need),
+            gib(have)
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// `bytes` in GiB with two decimals.
+fn gib(bytes: u64) -> String {
+    let mut s = String::new();
+    let _ = write!(s, "{:.2} GiB", bytes as f64 / (1u64 << 30) as f64);
+    s
+}
+
+/// The memory this process can still use: the least of the system's available memory
+/// (`MemAvailable`), its control group's limit less its usage (cgroup v2), and its address-space limit
+/// (`ulimit -v`) less its address space. `None` where none of them can be read (other systems than
+/// Linux).
+pub fn available() -> Option<u64> {
+    let read = |p: &str| std::fs::read_to_string(p).ok();
+    let meminfo = read("/proc/meminfo").and_then(|s| field_kib(&s, "MemAvailable:"));
+    let rlimit = read("/proc/self/limits")
+        .and_then(|s| address_space_limit(&s))
+        .zip(read("/proc/self/status").and_then(|s| field_kib(&s, "VmSize:")))
+        .map(|(limit, used)| limit.saturating_sub(used));
+    let cgroup = read("/proc/self/cgroup").and_then(|c| {
+        let dir = format!("/sys/fs/cgroup{}", c.lines().find_map(|l| l.strip_prefix("0::"))?);
+        let max = read(&format!("{dir}/memory.max"))?.trim().parse::<u64>().ok()?;
+        let current = read(&format!("{dir}/memory.current"))?
+            .trim()
+            .parse::<u64>()
+            .ok()?;
+        Some(max.saturating_sub(current))
+    });
+    [meminfo, rlimit, cgroup].into_iter().flatten().min()
+}
+
+/// A `Name:   N kB` line of `/proc/meminfo` or `/proc/self/status`, in bytes.
+fn field_kib(text: &str, name: &str) -> Option<u64> {
+    let line = text.lines().find(|l| l.starts_with(name))?;
+    let kib: u64 = line[name.len()..].split_whitespace().next()?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// The soft limit of `Max address space` in `/proc/self/limits` (`None` when unlimited).
+fn address_space_limit(limits: &str) -> Option<u64> {
+    let line = limits.lines().find(|l| l.starts_with("Max address space"))?;
+    line["Max address space".len()..]
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn refuses_a_frame_larger_than_what_is_available_with_both_sizes() {
+        // 16384 x 16384 x 42 bytes = 10.5 GiB exactly.
+        assert_eq!(frame_bytes(16384, 16384), 11_274_289_152);
+        assert_eq!(
+            check_against(16384, 16384, Some(4 << 30)).unwrap_err(),
+            "a 16384x16384 frame needs 10.50 GiB (42 bytes a pixel) and only 4.00 GiB is available: \
+             lower the resolution, or render it in parts (--tiles K/N)"
+        );
+        assert!(check_against(16384, 16384, Some(11_274_289_152)).is_ok());
+        assert!(check_against(16384, 16384, None).is_ok());
+        assert!(check_against(1920, 1080, Some(1 << 30)).is_ok());
+    }
+
+    #[test]
+    fn reads_the_proc_files() {
+        let meminfo = "MemTotal:       24000000 kB\nMemAvailable:   3000000 kB\n";
+        assert_eq!(field_kib(meminfo, "MemAvailable:"), Some(3_072_000_000));
+        assert_eq!(field_kib(meminfo, "VmSize:"), None);
+        let limits = "Limit                     Soft Limit           Hard Limit           Units\n\
+                      Max address space         4096000000           unlimited            bytes\n";
+        assert_eq!(address_space_limit(limits), Some(4_096_000_000));
+        let unlimited = "Max address space         unlimited            unlimited            bytes\n";
+        assert_eq!(address_space_limit(unlimited), None);
+    }
+
+    /// On Linux, where the test suite runs, at least `/proc/meminfo` is there to read.
+    #[test]
+    #[cfg(target_os = "linux")]
+    fn this_machine_has_a_figure() {
+        let have = available().expect("a figure on Linux");
+        assert!(have > 1 << 20, "{have} bytes available");
+    }
+}

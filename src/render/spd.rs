@@ -1,0 +1,141 @@
+//! The Standard Procedural Databases' test procedure (E. Haines, "A Proposal for Standard Graphics
+//! Environments", *IEEE CG&A* 7(11), 1987, and the SPD's Readme), so that a renderer's ray counts can be
+//! compared with the table the Readme gives for each database at its default size:
+//!
+//! - 512 × 512 pixels; one eye ray through each of the 513 × 513 pixel corners, each pixel the mean of
+//!   its four corners ([`Options::spd`], [`corners_to_pixels`]);
+//! - the eye ray is depth 1 and the ray tree stops at depth 5, i.e. four bounces after the eye ray;
+//! - every hit on a reflective (`Ks` > 0) or transmitting (`T` > 0) surface spawns its rays whatever
+//!   their weight (this renderer has no adaptive cutoff), and a total internal reflection spawns the
+//!   reflection ray even where `Ks` is 0.
+//!
+//! Shadow rays are those toward each light that lies in front of the surface, as always.
+
+use super::film::Film;
+use super::options::Options;
+use super::whitted::RayCounts;
+use crate::scene::Scene;
+
+/// Image side of the procedure.
+pub const SIZE: u32 = 512;
+/// Bounces after the eye ray: the tree stops at depth 5 with the eye ray at depth 1.
+pub const MAX_DEPTH: u32 = 4;
+
+/// The options of the procedure for `scene`: 513 × 513 corner rays, four bounces, spp 0.
+pub fn options(scene: &Scene) -> Options {
+    Options {
+        width: SIZE + 1,
+        height: SIZE + 1,
+        max_depth: MAX_DEPTH,
+        spp: 0,
+        spd: true,
+        ..Options::new(scene)
+    }
+}
+
+/// A frame of `w + 1` × `h + 1` corner samples as the `w` × `h` image whose pixels are the means of
+/// their four corners.
+pub fn corners_to_pixels(corners: &Film) -> Film {
+    let (w, h) = (corners.width - 1, corners.height - 1);
+    let mut film = Film::new(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            let sum =
+                corners.get(x, y) + corners.get(x + 1, y) + corners.get(x, y + 1) + corners.get(x + 1, y + 1);
+            film.pixels[(y * w + x) as usize] = sum * 0.25;
+        }
+    }
+    film
+}
+
+/// What the Readme's table counts for one database.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Counts {
+    /// Eye rays that hit something.
+    pub eye_hits: u64,
+    /// Reflection rays.
+    pub reflected: u64,
+    /// Refraction rays.
+    pub refracted: u64,
+    /// Shadow rays.
+    pub shadow: u64,
+}
+
+impl Counts {
+    /// The counts of a frame's rays.
+    pub fn of(rays: &RayCounts) -> Self {
+        Counts {
+            eye_hits: rays.primary_hits,
+            reflected: rays.reflected,
+            refracted: rays.refracted,
+            shadow: rays.shadow,
+        }
+    }
+
+    /// True if every count is within `tolerance` (relative) of `want`'s, and zero where `want`'s is.
+    pub fn within(&self, want: &Counts, tolerance: f64) -> bool {
+        let close = |got: u64, want: u64| (got as f64 - want as f64).abs() <= tolerance * want as f64;
+        close(self.eye_hits, want.eye_hits)
+            && close(self.reflected, want.reflected)
+            && close(self.refracted, want.refracted)
+            && close(self.shadow, want.shadow)
+    }
+}
+
+/// The Readme's table: each database at its default size, with the procedure above.
+pub const README: [(&str, Counts); 7] = [
+    ("balls", counts(263_169, 175_095, 0, 954_368)),
+    ("gears", counts(245_086, 304_643, 207_564, 2_246_955)),
+    ("mount", counts(173_125, 354_769, 354_769, 412_922)),
+    ("rings", counts(263_169, 315_236, 0, 1_085_002)),
+    ("teapot", counts(161_120, 225_248, 0, 407_656)),
+    ("tetra", counts(49_788, 0, 0, 46_112)),
+    ("tree", counts(169_836, 0, 0, 1_097_419)),
+];
+
+const fn counts(eye_hits: u64, reflected: u64, refracted: u64, shadow: u64) -> Counts {
+    Counts {
+        eye_hits,
+        reflected,
+        refracted,
+        shadow,
+    }
+}
+
+/// The Readme's counts for the database a file is named after (`teapot_default.nff` → teapot); they
+/// hold only for the default sizes.
+pub fn readme_counts(file_name: &str) -> Option<Counts> {
+    README
+        .iter()
+        .find(|(name, _)| file_name.starts_with(name))
+        .map(|(_, c)| *c)
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+
+    #[test]
+    fn a_pixel_is_the_mean_of_its_four_corners() {
+        let mut corners = Film::new(3, 2);
+        for (i, p) in corners.pixels.iter_mut().enumerate() {
+            *p = Vec3::splat(i as f32);
+        }
+        // Corners 0 1 2 / 3 4 5: pixel 0 = (0+1+3+4)/4 = 2, pixel 1 = (1+2+4+5)/4 = 3.
+        let film = corners_to_pixels(&corners);
+        assert_eq!((film.width, film.height), (2, 1));
+        assert_eq!(film.pixels, [Vec3::splat(2.0), Vec3::splat(3.0)]);
+    }
+
+    #[test]
+    fn counts_match_within_a_tolerance_and_zero_means_zero() {
+        let want = readme_counts("tetra_default.nff").unwrap();
+        let near = counts(49_788 + 4_000, 0, 0, 46_112 - 4_000);
+        assert!(near.within(&want, 0.1));
+        assert!(!counts(49_788, 1, 0, 46_112).within(&want, 0.1));
+        assert!(!counts(40_000, 0, 0, 46_112).within(&want, 0.1));
+        assert_eq!(readme_counts("jacks_1.nff"), None);
+    }
+}
