@@ -1,14 +1,14 @@
 //! Every scene of `scenes/` and `scenes/spd/` renders to the bytes recorded in `golden/images.txt`, with
-//! every accelerator (brute force too, on scenes small enough for it), on every instruction set this CPU
-//! has, and with both kernels. The digests were recorded by the renderer as it was before the lane
+//! every accelerator of the test kit (`whitted::kit::contestants`: every build, on every instruction set
+//! this CPU has; brute force too, on scenes small enough for it), and with both kernels. The digests were recorded by the renderer as it was before the lane
 //! abstraction and the split of the renderer (commit 671ea29), so this test is what proves that those
 //! moves changed no pixel; it stays as a guard against any change that moves one. It is a regression
 //! check beside the closed-form ones (`shading.rs`): it says that an image changed, not that it is right.
 
 mod common;
 
-use whitted::accel::bvh2::Builder;
-use whitted::accel::{Accel, AccelKind, BuildOptions, Prims, Simd};
+use whitted::accel::{Accel, AccelKind, Prims};
+use whitted::kit::contestants;
 use whitted::render::{Kernel, Options, Renderer};
 
 /// FNV-1a, 64 bits, over the 8-bit RGB pixels (written here, not taken from the crate under test).
@@ -49,32 +49,13 @@ fn every_scene_renders_the_recorded_bytes_with_every_accelerator_and_kernel() {
     for (path, want) in &table {
         let scene = whitted::scene::load(&common::root().join(path)).unwrap();
         let prims = Prims::new(&scene);
-        let mut accels = vec![
-            ("grid", Accel::build(prims, AccelKind::Grid)),
-            (
-                "bvh2 midpoint",
-                Accel::build_with(
-                    prims,
-                    AccelKind::Bvh2,
-                    BuildOptions {
-                        builder: Builder::Midpoint,
-                        bins: 12,
-                    },
-                ),
-            ),
-            ("bvh2", Accel::build(prims, AccelKind::Bvh2)),
-            ("bvh4", Accel::build(prims, AccelKind::Bvh4)),
-        ];
-        for (name, simd) in [("bvh8 portable", Simd::Portable), ("bvh8 avx2", Simd::Avx2)] {
-            let mut accel = Accel::build(prims, AccelKind::Bvh8);
-            if accel.set_simd(simd) {
-                accels.push((name, accel));
-            } else {
-                assert!(!simd.available(), "{name}: refused on a CPU that has it");
-            }
-        }
+        // Every accelerator and kernel of the test kit, and brute force where it is cheap.
+        let mut accels: Vec<(String, Accel)> = contestants::all(prims)
+            .into_iter()
+            .map(|c| (c.name, c.accel))
+            .collect();
         if scene.bounded_count() < 20_000 {
-            accels.push(("brute force", Accel::build(prims, AccelKind::None)));
+            accels.push(("brute force".into(), Accel::build(prims, AccelKind::None)));
         }
         for (name, accel) in &accels {
             for kernel in [Kernel::Single, Kernel::Packet] {

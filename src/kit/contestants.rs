@@ -121,7 +121,8 @@ const SIMD: [(Simd, &str); 2] = [(Simd::Avx2, "avx2"), (Simd::Portable, "portabl
 
 /// Every build of [`BUILDS`] over `prims`, each built once (on the current rayon pool), the wide BVHs at
 /// their default build once per instruction set this CPU has (copies of one build). On a CPU without
-/// AVX2 it says, on stderr, that only the portable kernels are there.
+/// AVX2 it says, on stderr, that only the portable kernels are there; a set the CPU has but a structure
+/// refuses is a bug, and panics.
 pub fn all(prims: Prims<'_>) -> Vec<Contestant<'_>> {
     if !Simd::Avx2.available() {
         eprintln!("this CPU has no AVX2: the wide BVHs run their portable kernels only");
@@ -144,6 +145,12 @@ pub fn all(prims: Prims<'_>) -> Vec<Contestant<'_>> {
                     name: format!("{} {set}", b.name),
                     accel: copy,
                 });
+            } else {
+                assert!(
+                    !simd.available(),
+                    "{}: {set} refused on a CPU that has it",
+                    b.name
+                );
             }
         }
     }
