@@ -12,7 +12,7 @@ use whitted::render::progressive::Progressive;
 use whitted::render::{Options, tiles};
 use whitted::scene::Scene;
 
-use super::args::{build_options, check_threads, resolution};
+use super::args::{build_options, resolution};
 use super::render::RenderArgs;
 
 /// A render, checked and ready to run.
@@ -77,7 +77,6 @@ impl Plan {
             spd: false,
         };
         options.validate()?;
-        check_threads(args.frame.threads)?;
         let every = every(args)?;
         let target = target(args, scene, &options)?;
         Ok(Plan {
@@ -259,11 +258,20 @@ mod tests {
         );
     }
 
+    /// `--threads` is bounded where it is parsed: a count rayon could not start (100000 threads panic
+    /// in the standard library before the pool reports its error) is a usage error.
     #[test]
-    fn refuses_zero_threads_after_a_bad_resolution() {
-        assert_eq!(error("--threads 0"), "--threads must be at least 1");
-        assert!(error("--threads 0 --height 0").starts_with("resolution must be"));
+    fn threads_are_parsed_within_1_to_1024() {
+        for (value, expected) in [
+            ("0", "0 is not in 1..=1024"),
+            ("100000", "100000 is not in 1..=1024"),
+        ] {
+            let parsed = Render::try_parse_from(["render", "--threads", value]);
+            let e = parsed.err().expect("refused").to_string();
+            assert!(e.contains(expected), "{e}");
+        }
         assert_eq!(plan("--threads 3").threads, Some(3));
+        assert_eq!(plan("--threads 1024").threads, Some(1024));
     }
 
     #[test]
