@@ -5,6 +5,7 @@ mod args;
 mod bench;
 mod info;
 mod merge;
+mod outputs;
 mod plan;
 mod render;
 #[cfg(feature = "view")]

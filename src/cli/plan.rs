@@ -127,14 +127,19 @@ fn spp_per_pass(args: &RenderArgs, scene: &Scene) -> (u32, Vec<String>) {
     (1, warnings)
 }
 
-/// The image or `.partial` file to write, checked against the options that need one or the other.
-fn target(args: &RenderArgs, scene: &Scene, options: &Options) -> whitted::Result<Target> {
-    let error = |message: &str| Err(whitted::Error::msg(message));
-    let partial = args.partial
+/// Whether the output is a `.partial` file (`--partial`, or its name) rather than an image.
+pub fn writes_partial(args: &RenderArgs) -> bool {
+    args.partial
         || args
             .output
             .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("partial"));
+            .is_some_and(|e| e.eq_ignore_ascii_case("partial"))
+}
+
+/// The image or `.partial` file to write, checked against the options that need one or the other.
+fn target(args: &RenderArgs, scene: &Scene, options: &Options) -> whitted::Result<Target> {
+    let error = |message: &str| Err(whitted::Error::msg(message));
+    let partial = writes_partial(args);
     if !partial && (args.tiles.is_some() || args.passes_range.is_some()) {
         return error(
             "--tiles and --passes-range render part of a frame: write it to a .partial file (-o part.partial) and combine the parts with `whitted merge`",

@@ -8,20 +8,21 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use whitted::accel::{Accel, Prims};
 use whitted::parts::partial::Part;
-use whitted::render::Renderer;
 use whitted::render::progressive::Progressive;
+use whitted::render::{Renderer, memory};
 
 use super::args::{
     BuildKind, FrameArgs, load_scene, non_negative, part_of, pass_range, positive, thread_pool,
 };
-use super::plan::{Plan, Target};
+use super::outputs;
+use super::plan::{Plan, Target, writes_partial};
 
 /// Arguments of `whitted render`.
 #[derive(Args)]
 pub struct RenderArgs {
     /// The scene (.p3f, .nff, .ply, .obj, optionally .gz); the built-in default scene if omitted.
     pub scene: Option<PathBuf>,
-    /// Output image: .png, .ppm (8-bit) or .exr (linear float); or a .partial file (see --tiles).
+    /// Output image: .png, .ppm, .jpg (8-bit) or .exr (linear float); or a .partial file (see --tiles).
     #[arg(short, long, default_value = "render.png")]
     pub output: PathBuf,
     /// Render only part K of N of the image (K from 0; a fixed split of its tiles, balanced by area)
@@ -89,9 +90,14 @@ static STOP: AtomicBool = AtomicBool::new(false);
 /// Renders and writes the image.
 pub fn run(args: &RenderArgs) -> whitted::Result<()> {
     let start = Instant::now();
+    check_outputs(args)?;
     let mut scene = load_scene(args.scene.as_deref())?;
     warn(&scene.warnings);
     let plan = Plan::new(args, &mut scene)?;
+    // A part's sums cover its tiles only; a whole frame is refused here rather than aborted later.
+    if plan.tiles.is_none() {
+        memory::check(plan.options.width, plan.options.height).map_err(whitted::Error::msg)?;
+    }
     let pool = thread_pool(plan.threads)?;
     let loaded = start.elapsed();
     let build_start = Instant::now();
@@ -103,13 +109,6 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
     // Ctrl-C stops at the next tile; what was written stays whole (files are renamed into place).
     // Installing fails only if another handler is set, as in tests that call `run` twice: keep it.
     let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::Relaxed));
-    if let Target::Image {
-        snapshots: Some(dir), ..
-    } = &plan.target
-    {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| whitted::Error::file(dir, format!("cannot create the directory: {e}")))?;
-    }
 
     let render_start = Instant::now();
     let mut acc = plan.accumulator();
@@ -136,6 +135,17 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
         );
     }
     Ok(())
+}
+
+/// Checks the files the render writes (the output, and the snapshots of `--progressive-out`), before
+/// the scene is loaded.
+fn check_outputs(args: &RenderArgs) -> whitted::Result<()> {
+    let partial = writes_partial(args);
+    outputs::check(&args.output, partial)?;
+    match &args.progressive_out {
+        Some(dir) if !partial && args.passes > 1 => outputs::check_snapshots(dir, &args.output),
+        _ => Ok(()),
+    }
 }
 
 /// Prints `warnings` on stderr, one a line.
@@ -203,10 +213,7 @@ fn write(plan: &Plan, acc: &Progressive) -> whitted::Result<()> {
     let film = acc.film();
     film.write(&plan.output, srgb)?;
     if let Some(dir) = snapshots {
-        let stem = plan.output.file_stem().unwrap_or_default().to_string_lossy();
-        let ext = plan.output.extension().unwrap_or_default().to_string_lossy();
-        let name = format!("{stem}-{:04}.{ext}", acc.passes());
-        film.write(&dir.join(name), srgb)?;
+        film.write(&outputs::snapshot(dir, &plan.output, acc.passes()), srgb)?;
     }
     Ok(())
 }
