@@ -269,8 +269,75 @@ fn progressive_passes_converge() {
     assert!((got - exact).abs() < 0.1, "{got} vs {exact}");
     let stopped = AtomicBool::new(true);
     assert!(r.render_pass(257, &|| {}, &stopped).is_none());
-    assert!(mean.render_pass(&r, 257, &|| {}, &stopped).is_none());
+    assert!(mean.render_pass(&r, 257, &|| {}, &stopped).is_err());
     assert_eq!(mean.passes(), 256, "a stopped pass is not counted");
+}
+
+/// A first pass stopped after some tiles keeps exactly those tiles, over that pass; the other tiles
+/// rendered apart and joined to them make the whole pass, bit for bit. A later pass stopped keeps
+/// nothing, so that the mean stays one of whole passes.
+#[test]
+fn a_stopped_first_pass_keeps_its_tiles_and_joins_into_the_whole_pass() {
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    use whitted::render::progressive::Progressive;
+
+    let scene = everything_scene();
+    let accel = Accel::build(Prims::new(&scene), AccelKind::Bvh4);
+    let options = Options {
+        spp: 4,
+        ..Options::new(&scene)
+    };
+    let r = Renderer::new(&scene, &accel, options);
+    // One worker: the tile that raises the stop is the last one finished.
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let never = AtomicBool::new(false);
+    let mut whole = Progressive::new(48, 40);
+    pool.install(|| whole.render_pass(&r, 1, &|| {}, &never)).unwrap();
+
+    // 48 x 40 is 3 x 3 tiles: stop after the fourth.
+    let (stop, finished) = (AtomicBool::new(false), AtomicUsize::new(0));
+    let on_tile = || {
+        if finished.fetch_add(1, Ordering::Relaxed) + 1 == 4 {
+            stop.store(true, Ordering::Relaxed);
+        }
+    };
+    let mut first = Progressive::new(48, 40);
+    let stopped = pool
+        .install(|| first.render_pass(&r, 1, &on_tile, &stop))
+        .unwrap_err();
+    assert!(!stopped.is_complete());
+    assert_eq!(first.passes(), 0, "a stopped pass is not folded in");
+    let kept = first.keep_finished(&stopped);
+    assert_eq!((kept.tile_indices().len(), kept.passes()), (4, 1));
+
+    let rest: Vec<u32> = (0..9).filter(|i| !kept.tile_indices().contains(i)).collect();
+    let mut others = Progressive::for_tiles(48, 40, rest);
+    pool.install(|| others.render_pass(&r, 1, &|| {}, &never))
+        .unwrap();
+    let joined = kept.join(others);
+    let bits = |p: &Progressive| -> Vec<u64> { p.sums().iter().flatten().map(|v| v.to_bits()).collect() };
+    assert_eq!(joined.tile_indices(), whole.tile_indices());
+    assert_eq!(joined.passes(), 1);
+    assert!(
+        bits(&joined) == bits(&whole),
+        "the joined pass differs from the whole one"
+    );
+    assert_eq!(joined.film(), whole.film());
+
+    // Nothing finished: nothing kept, and joining it adds nothing.
+    let stopped =
+        pool.install(|| Progressive::new(48, 40).render_pass(&r, 1, &|| {}, &AtomicBool::new(true)));
+    let none = Progressive::new(48, 40).keep_finished(&stopped.unwrap_err());
+    assert_eq!((none.tile_indices().len(), none.passes()), (0, 0));
+    assert!(bits(&whole.clone().join(none)) == bits(&whole));
+    // A second pass stopped keeps nothing of itself.
+    let before = bits(&whole);
+    assert!(
+        pool.install(|| whole.render_pass(&r, 2, &on_tile, &stop))
+            .is_err()
+    );
+    assert_eq!(whole.passes(), 1);
+    assert!(bits(&whole) == before);
 }
 
 /// `--passes` with `--every` and `--progressive-out` writes numbered snapshots; a count that is not a

@@ -290,5 +290,5 @@ fn render_with_progress(
         &STOP,
     );
     bar.finish_and_clear();
-    done.map(|_| ())
+    done.ok().map(|_| ())
 }
