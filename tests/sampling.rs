@@ -1,7 +1,8 @@
 //! Distribution ray tracing (`src/render/sampler.rs`, `camera.rs`, `whitted.rs`, `progressive.rs`):
 //! soft shadows against their closed-form visible fraction, depth of field against the pinhole image on
 //! the focal plane and against the circle of confusion off it, reproducibility across threads and
-//! kernels, progressive passes and Ctrl-C from the command line.
+//! kernels, progressive passes and what a stopped pass keeps (Ctrl-C from the command line is in
+//! tests/interrupt.rs).
 
 mod common;
 
@@ -391,56 +392,4 @@ fn cli_progressive_snapshots_and_spp_rounding() {
     );
     let run = common::whitted(&["render", "--aperture", "-1", "-o", out.to_str().unwrap()]);
     assert_eq!(run.status.code(), Some(2));
-}
-
-/// Ctrl-C during a long progressive render writes the mean of the passes completed so far, whole.
-#[cfg(unix)]
-#[test]
-fn ctrl_c_keeps_the_last_complete_pass() {
-    use std::process::{Command, Stdio};
-    use std::time::Duration;
-
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("c.png");
-    let snaps = dir.path().join("snaps");
-    let child = Command::new(env!("CARGO_BIN_EXE_whitted"))
-        .args([
-            "render",
-            "--width",
-            "64",
-            "--passes",
-            "100000",
-            "--progressive-out",
-        ])
-        .arg(&snaps)
-        .arg("-o")
-        .arg(&out)
-        .current_dir(common::root())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    // Poll for the first snapshot (give up after 3,000 polls 20 ms apart).
-    let mut polls = 0;
-    while !out.exists() {
-        polls += 1;
-        assert!(polls < 3000, "no snapshot written");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    let result = child.wait_with_output().unwrap();
-    let stderr = String::from_utf8_lossy(&result.stderr);
-    assert!(result.status.success(), "{stderr}");
-    assert!(stderr.contains("interrupted after"), "{stderr}");
-    let img = image::open(&out).unwrap();
-    assert_eq!(img.width(), 64);
-    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .filter(|n| n != "c.png" && n != "snaps")
-        .collect();
-    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
 }

@@ -269,10 +269,6 @@ fn render_checks_the_split_and_resumes() {
         &["render", SCENE, "--tiles", "0/2", "-o", &path(d, "p.png")],
         ".partial",
     );
-    fails(
-        &["render", SCENE, "--resume", "-o", &path(d, "p.png")],
-        ".partial outputs only",
-    );
     assert!(!Path::new(&file).exists());
 
     let args = [

@@ -37,6 +37,8 @@ pub struct Plan {
     pub output: PathBuf,
     /// What is written to it.
     pub target: Target,
+    /// Go on from what an interrupted run of the same render wrote (`--resume`).
+    pub resume: bool,
     /// What the arguments asked for that is not done, for the user to see.
     pub warnings: Vec<String>,
     /// No progress bar or summary.
@@ -49,9 +51,8 @@ pub enum Target {
     /// An image (sRGB-encoded or linear), and with `--progressive-out` a numbered copy of each one
     /// written in that directory.
     Image { srgb: bool, snapshots: Option<PathBuf> },
-    /// A `.partial` file of this part's sums, headed by the render's settings; with `resume`, a file
-    /// that holds this part already is kept and nothing is rendered.
-    Partial { settings: Settings, resume: bool },
+    /// A `.partial` file of this part's sums, headed by the render's settings.
+    Partial { settings: Settings },
 }
 
 impl Plan {
@@ -90,6 +91,7 @@ impl Plan {
             every,
             output: args.output.clone(),
             target,
+            resume: args.resume,
             warnings,
             quiet: args.quiet,
         })
@@ -100,13 +102,19 @@ impl Plan {
         self.pass_range.clone().unwrap_or(0..self.total_passes)
     }
 
+    /// The indices of the tiles this run renders, increasing.
+    pub fn tile_indices(&self) -> Vec<u32> {
+        let (w, h) = (self.options.width, self.options.height);
+        match self.tiles {
+            Some((k, n)) => tiles::part(w, h, k, n),
+            None => (0..tiles::tiles(w, h).len() as u32).collect(),
+        }
+    }
+
     /// No pass yet over the tiles this run renders.
     pub fn accumulator(&self) -> Progressive {
         let (w, h) = (self.options.width, self.options.height);
-        match self.tiles {
-            Some((k, n)) => Progressive::for_tiles(w, h, tiles::part(w, h, k, n)),
-            None => Progressive::new(w, h),
-        }
+        Progressive::for_tiles(w, h, self.tile_indices())
     }
 }
 
@@ -145,16 +153,12 @@ fn target(args: &RenderArgs, scene: &Scene, options: &Options) -> whitted::Resul
             "--tiles and --passes-range render part of a frame: write it to a .partial file (-o part.partial) and combine the parts with `whitted merge`",
         );
     }
-    if args.resume && !partial {
-        return error("--resume applies to .partial outputs only");
-    }
     if partial && args.progressive_out.is_some() {
         return error("--progressive-out writes images; a .partial render cannot keep snapshots");
     }
     Ok(if partial {
         Target::Partial {
             settings: Settings::new(scene, options, args.passes),
-            resume: args.resume,
         }
     } else {
         Target::Image {
@@ -305,8 +309,22 @@ mod tests {
     }
 
     #[test]
-    fn resume_needs_a_partial_output() {
-        assert_eq!(error("--resume"), "--resume applies to .partial outputs only");
+    fn resume_applies_to_images_and_partial_files() {
+        assert!(plan("--resume").resume);
+        assert!(plan("--resume --passes 3 -o out.exr").resume);
+        assert!(plan("--resume --tiles 0/2 --partial").resume);
+        assert!(!plan("").resume);
+    }
+
+    #[test]
+    fn the_tiles_of_a_part_or_of_the_whole_frame() {
+        // 640x480: 40 x 30 tiles of 16 pixels.
+        assert_eq!(plan("").tile_indices(), (0..1200).collect::<Vec<u32>>());
+        assert_eq!(
+            plan("--tiles 1/4 --partial").tile_indices(),
+            tiles::part(640, 480, 1, 4)
+        );
+        assert_eq!(plan("--tiles 1/4 --partial").tile_indices().len(), 300);
     }
 
     #[test]
@@ -376,13 +394,8 @@ mod tests {
             (settings.aperture, settings.focal, settings.passes),
             (2.0, 0.5, 4)
         );
-        assert_eq!(
-            p.target,
-            Target::Partial {
-                settings,
-                resume: true
-            }
-        );
+        assert_eq!(p.target, Target::Partial { settings });
+        assert!(p.resume);
         let (w, h) = (640, 480);
         assert_eq!(p.tiles, Some((1, 4)));
         assert_eq!(p.accumulator().tile_indices(), tiles::part(w, h, 1, 4));
