@@ -342,9 +342,11 @@ fn cli_reports_errors_in_one_line() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("bad.p3f");
     std::fs::write(&path, after_camera("s 0 0 0 x\n")).unwrap();
+    let image = dir.path().join("x.png");
     for cmd in ["info", "render"] {
         let out = common::whitted(
-            &[cmd, path.to_str().unwrap(), "-o", "/dev/null/x.png"][..if cmd == "info" { 2 } else { 4 }],
+            &[cmd, path.to_str().unwrap(), "-o", image.to_str().unwrap()]
+                [..if cmd == "info" { 2 } else { 4 }],
         );
         assert_eq!(out.status.code(), Some(1));
         let err = String::from_utf8(out.stderr).unwrap();

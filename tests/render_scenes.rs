@@ -117,7 +117,8 @@ fn thread_count_does_not_change_the_image() {
     assert!(images[0] == images[1]);
 }
 
-/// `whitted render` with no scene writes the default scene's image; a failed write leaves nothing.
+/// `whitted render` with no scene writes the default scene's image; an output in a missing directory is
+/// refused (before rendering) and leaves nothing.
 #[test]
 fn cli_renders_the_default_scene() {
     let dir = tempfile::tempdir().unwrap();
@@ -129,7 +130,14 @@ fn cli_renders_the_default_scene() {
     let bad = dir.path().join("nowhere").join("x.png");
     let run = common::whitted(&["render", "-o", bad.to_str().unwrap(), "--width", "8", "--quiet"]);
     assert_eq!(run.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&run.stderr).contains("cannot write the image"));
+    assert_eq!(
+        String::from_utf8_lossy(&run.stderr),
+        format!(
+            "whitted: {}: the directory {} does not exist\n",
+            bad.display(),
+            dir.path().join("nowhere").display()
+        )
+    );
     assert_eq!(
         std::fs::read_dir(dir.path()).unwrap().count(),
         1,

@@ -1,7 +1,8 @@
 //! Distribution ray tracing (`src/render/sampler.rs`, `camera.rs`, `whitted.rs`, `progressive.rs`):
 //! soft shadows against their closed-form visible fraction, depth of field against the pinhole image on
 //! the focal plane and against the circle of confusion off it, reproducibility across threads and
-//! kernels, progressive passes and Ctrl-C from the command line.
+//! kernels, progressive passes and what a stopped pass keeps (Ctrl-C from the command line is in
+//! tests/interrupt.rs).
 
 mod common;
 
@@ -278,8 +279,75 @@ fn progressive_passes_converge() {
     assert!((got - exact).abs() < 0.1, "{got} vs {exact}");
     let stopped = AtomicBool::new(true);
     assert!(r.render_pass(257, &|| {}, &stopped).is_none());
-    assert!(mean.render_pass(&r, 257, &|| {}, &stopped).is_none());
+    assert!(mean.render_pass(&r, 257, &|| {}, &stopped).is_err());
     assert_eq!(mean.passes(), 256, "a stopped pass is not counted");
+}
+
+/// A first pass stopped after some tiles keeps exactly those tiles, over that pass; the other tiles
+/// rendered apart and joined to them make the whole pass, bit for bit. A later pass stopped keeps
+/// nothing, so that the mean stays one of whole passes.
+#[test]
+fn a_stopped_first_pass_keeps_its_tiles_and_joins_into_the_whole_pass() {
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    use whitted::render::progressive::Progressive;
+
+    let scene = everything_scene();
+    let accel = Accel::build(Prims::new(&scene), AccelKind::Bvh4);
+    let options = Options {
+        spp: 4,
+        ..Options::new(&scene)
+    };
+    let r = Renderer::new(&scene, &accel, options);
+    // One worker: the tile that raises the stop is the last one finished.
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let never = AtomicBool::new(false);
+    let mut whole = Progressive::new(48, 40);
+    pool.install(|| whole.render_pass(&r, 1, &|| {}, &never)).unwrap();
+
+    // 48 x 40 is 3 x 3 tiles: stop after the fourth.
+    let (stop, finished) = (AtomicBool::new(false), AtomicUsize::new(0));
+    let on_tile = || {
+        if finished.fetch_add(1, Ordering::Relaxed) + 1 == 4 {
+            stop.store(true, Ordering::Relaxed);
+        }
+    };
+    let mut first = Progressive::new(48, 40);
+    let stopped = pool
+        .install(|| first.render_pass(&r, 1, &on_tile, &stop))
+        .unwrap_err();
+    assert!(!stopped.is_complete());
+    assert_eq!(first.passes(), 0, "a stopped pass is not folded in");
+    let kept = first.keep_finished(&stopped);
+    assert_eq!((kept.tile_indices().len(), kept.passes()), (4, 1));
+
+    let rest: Vec<u32> = (0..9).filter(|i| !kept.tile_indices().contains(i)).collect();
+    let mut others = Progressive::for_tiles(48, 40, rest);
+    pool.install(|| others.render_pass(&r, 1, &|| {}, &never))
+        .unwrap();
+    let joined = kept.join(others);
+    let bits = |p: &Progressive| -> Vec<u64> { p.sums().iter().flatten().map(|v| v.to_bits()).collect() };
+    assert_eq!(joined.tile_indices(), whole.tile_indices());
+    assert_eq!(joined.passes(), 1);
+    assert!(
+        bits(&joined) == bits(&whole),
+        "the joined pass differs from the whole one"
+    );
+    assert_eq!(joined.film(), whole.film());
+
+    // Nothing finished: nothing kept, and joining it adds nothing.
+    let stopped =
+        pool.install(|| Progressive::new(48, 40).render_pass(&r, 1, &|| {}, &AtomicBool::new(true)));
+    let none = Progressive::new(48, 40).keep_finished(&stopped.unwrap_err());
+    assert_eq!((none.tile_indices().len(), none.passes()), (0, 0));
+    assert!(bits(&whole.clone().join(none)) == bits(&whole));
+    // A second pass stopped keeps nothing of itself.
+    let before = bits(&whole);
+    assert!(
+        pool.install(|| whole.render_pass(&r, 2, &on_tile, &stop))
+            .is_err()
+    );
+    assert_eq!(whole.passes(), 1);
+    assert!(bits(&whole) == before);
 }
 
 /// `--passes` with `--every` and `--progressive-out` writes numbered snapshots; a count that is not a
@@ -333,56 +401,4 @@ fn cli_progressive_snapshots_and_spp_rounding() {
     );
     let run = common::whitted(&["render", "--aperture", "-1", "-o", out.to_str().unwrap()]);
     assert_eq!(run.status.code(), Some(2));
-}
-
-/// Ctrl-C during a long progressive render writes the mean of the passes completed so far, whole.
-#[cfg(unix)]
-#[test]
-fn ctrl_c_keeps_the_last_complete_pass() {
-    use std::process::{Command, Stdio};
-    use std::time::Duration;
-
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("c.png");
-    let snaps = dir.path().join("snaps");
-    let child = Command::new(env!("CARGO_BIN_EXE_whitted"))
-        .args([
-            "render",
-            "--width",
-            "64",
-            "--passes",
-            "100000",
-            "--progressive-out",
-        ])
-        .arg(&snaps)
-        .arg("-o")
-        .arg(&out)
-        .current_dir(common::root())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    // Poll for the first snapshot (give up after 3,000 polls 20 ms apart).
-    let mut polls = 0;
-    while !out.exists() {
-        polls += 1;
-        assert!(polls < 3000, "no snapshot written");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let kill = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(kill.success());
-    let result = child.wait_with_output().unwrap();
-    let stderr = String::from_utf8_lossy(&result.stderr);
-    assert!(result.status.success(), "{stderr}");
-    assert!(stderr.contains("interrupted after"), "{stderr}");
-    let img = image::open(&out).unwrap();
-    assert_eq!(img.width(), 64);
-    let leftovers: Vec<_> = std::fs::read_dir(dir.path())
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .filter(|n| n != "c.png" && n != "snaps")
-        .collect();
-    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
 }

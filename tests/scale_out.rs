@@ -216,6 +216,34 @@ fn merge_refuses_bad_parts_by_name() {
     );
 }
 
+/// The output is checked before any part is read (here /dev/zero, which is never read): a name of no
+/// image format, a missing directory.
+#[test]
+fn merge_checks_its_output_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let stderr = |out: &str| {
+        let result = whitted(&["merge", out, "/dev/zero"]);
+        assert_eq!(result.status.code(), Some(1));
+        String::from_utf8(result.stderr).unwrap()
+    };
+    let gif = path(d, "out.gif");
+    assert_eq!(
+        stderr(&gif),
+        format!(
+            "whitted: {gif}: unknown image format: expected a .png, .ppm, .jpg, .jpeg or .exr file name\n"
+        )
+    );
+    let missing = path(d, "missing/out.png");
+    assert_eq!(
+        stderr(&missing),
+        format!(
+            "whitted: {missing}: the directory {} does not exist\n",
+            path(d, "missing")
+        )
+    );
+}
+
 #[test]
 fn render_checks_the_split_and_resumes() {
     let dir = tempfile::tempdir().unwrap();
@@ -240,10 +268,6 @@ fn render_checks_the_split_and_resumes() {
     fails(
         &["render", SCENE, "--tiles", "0/2", "-o", &path(d, "p.png")],
         ".partial",
-    );
-    fails(
-        &["render", SCENE, "--resume", "-o", &path(d, "p.png")],
-        ".partial outputs only",
     );
     assert!(!Path::new(&file).exists());
 

@@ -24,8 +24,8 @@ pub struct FrameArgs {
     /// Image height.
     #[arg(long)]
     pub height: Option<u32>,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
+    /// Worker threads, 1 to 1024 (default: all cores).
+    #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=1024))]
     pub threads: Option<usize>,
     /// Acceleration structure: none, grid, bvh2, bvh4, bvh8 (8-wide nodes, AVX2 where the CPU has it)
     /// or auto (bvh8 on CPUs with AVX2, else bvh4).
@@ -181,17 +181,8 @@ pub fn resolution(scene: &Scene, width: Option<u32>, height: Option<u32>) -> (u3
     }
 }
 
-/// Checks `--threads` (`None` is all cores), before the pool is started.
-pub fn check_threads(threads: Option<usize>) -> whitted::Result<()> {
-    if threads == Some(0) {
-        return Err(whitted::Error::msg("--threads must be at least 1"));
-    }
-    Ok(())
-}
-
-/// A rayon pool of `threads` workers (all cores when `None`).
+/// A rayon pool of `threads` workers (all cores when `None`; clap bounds the count).
 pub fn thread_pool(threads: Option<usize>) -> whitted::Result<rayon::ThreadPool> {
-    check_threads(threads)?;
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()

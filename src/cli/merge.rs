@@ -6,10 +6,12 @@ use std::path::PathBuf;
 use clap::Args;
 use whitted::parts;
 
+use super::outputs;
+
 /// Arguments of `whitted merge`.
 #[derive(Args)]
 pub struct MergeArgs {
-    /// The image to write: .png, .ppm or .exr.
+    /// The image to write: .png, .ppm, .jpg or .exr.
     output: PathBuf,
     /// The .partial files: together they must cover every pixel and pass exactly once.
     #[arg(required = true)]
@@ -22,8 +24,10 @@ pub struct MergeArgs {
     quiet: bool,
 }
 
-/// Checks and merges the parts, then writes the image (nothing is written if any check fails).
+/// Checks the output, then checks and merges the parts and writes the image (nothing is written if
+/// any check fails).
 pub fn run(args: &MergeArgs) -> whitted::Result<()> {
+    outputs::check(&args.output, false)?;
     let film = parts::merge::merge(&args.parts)?;
     film.write(&args.output, args.srgb)?;
     if !args.quiet {

@@ -1,10 +1,15 @@
-//! Command-line interface: parses arguments with clap and calls the library. Every failure is one line on
-//! stderr, `whitted: path:line:col: message`, and exit status 1; clap's usage errors exit with 2.
+//! Command-line interface: parses arguments with clap and calls the library.
+//!
+//! Exit statuses: 0 when the command is done; 1 on an error, reported in one line on stderr
+//! (`whitted: path:line:col: message`); 2 on a usage error (clap's: an unknown option, a value out of
+//! its range); 130 when Ctrl-C interrupted a render, after writing what was finished and saying so on
+//! stderr (128 + SIGINT, what a shell reports for a process the signal killed).
 
 mod args;
 mod bench;
 mod info;
 mod merge;
+mod outputs;
 mod plan;
 mod render;
 mod report;
@@ -40,19 +45,32 @@ enum Command {
     View(view::ViewArgs),
 }
 
+/// How a command that did not fail ended.
+pub enum Ended {
+    /// It did all it was asked.
+    Done,
+    /// Ctrl-C stopped it; what was finished is written.
+    Interrupted,
+}
+
+/// The exit status of an interrupted command: 128 + SIGINT.
+const INTERRUPTED: u8 = 130;
+
 /// Runs the command line and turns errors into a message and an exit status.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    let done = |result: whitted::Result<()>| result.map(|()| Ended::Done);
     let result = match cli.command {
-        Command::Info(args) => info::run(&args),
+        Command::Info(args) => done(info::run(&args)),
         Command::Render(args) => render::run(&args),
-        Command::Bench(args) => bench::run(&args),
-        Command::Merge(args) => merge::run(&args),
+        Command::Bench(args) => done(bench::run(&args)),
+        Command::Merge(args) => done(merge::run(&args)),
         #[cfg(feature = "view")]
-        Command::View(args) => view::run(&args),
+        Command::View(args) => done(view::run(&args)),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(Ended::Done) => ExitCode::SUCCESS,
+        Ok(Ended::Interrupted) => ExitCode::from(INTERRUPTED),
         Err(e) => {
             eprintln!("whitted: {e}");
             ExitCode::FAILURE

@@ -12,7 +12,7 @@ use whitted::render::progressive::Progressive;
 use whitted::render::{Options, tiles};
 use whitted::scene::Scene;
 
-use super::args::{DEFAULT_DEPTH, build_options, check_threads, render_spd_refuses, resolution, spd_frame};
+use super::args::{DEFAULT_DEPTH, build_options, render_spd_refuses, resolution, spd_frame};
 use super::render::RenderArgs;
 
 /// A render, checked and ready to run.
@@ -37,6 +37,8 @@ pub struct Plan {
     pub output: PathBuf,
     /// What is written to it.
     pub target: Target,
+    /// Go on from what an interrupted run of the same render wrote (`--resume`).
+    pub resume: bool,
     /// What the arguments asked for that is not done, for the user to see.
     pub warnings: Vec<String>,
     /// No progress bar or summary.
@@ -49,9 +51,8 @@ pub enum Target {
     /// An image (sRGB-encoded or linear), and with `--progressive-out` a numbered copy of each one
     /// written in that directory.
     Image { srgb: bool, snapshots: Option<PathBuf> },
-    /// A `.partial` file of this part's sums, headed by the render's settings; with `resume`, a file
-    /// that holds this part already is kept and nothing is rendered.
-    Partial { settings: Settings, resume: bool },
+    /// A `.partial` file of this part's sums, headed by the render's settings.
+    Partial { settings: Settings },
 }
 
 impl Plan {
@@ -80,7 +81,6 @@ impl Plan {
         };
         let options = spd_frame(args.report.spd, options, scene);
         options.validate()?;
-        check_threads(args.frame.threads)?;
         let every = every(args)?;
         let target = target(args, scene, &options)?;
         Ok(Plan {
@@ -94,6 +94,7 @@ impl Plan {
             every,
             output: args.output.clone(),
             target,
+            resume: args.resume,
             warnings,
             quiet: args.quiet,
         })
@@ -104,13 +105,19 @@ impl Plan {
         self.pass_range.clone().unwrap_or(0..self.total_passes)
     }
 
+    /// The indices of the tiles this run renders, increasing.
+    pub fn tile_indices(&self) -> Vec<u32> {
+        let (w, h) = (self.options.width, self.options.height);
+        match self.tiles {
+            Some((k, n)) => tiles::part(w, h, k, n),
+            None => (0..tiles::tiles(w, h).len() as u32).collect(),
+        }
+    }
+
     /// No pass yet over the tiles this run renders.
     pub fn accumulator(&self) -> Progressive {
         let (w, h) = (self.options.width, self.options.height);
-        match self.tiles {
-            Some((k, n)) => Progressive::for_tiles(w, h, tiles::part(w, h, k, n)),
-            None => Progressive::new(w, h),
-        }
+        Progressive::for_tiles(w, h, self.tile_indices())
     }
 }
 
@@ -131,21 +138,23 @@ fn spp_per_pass(args: &RenderArgs, scene: &Scene) -> (u32, Vec<String>) {
     (1, warnings)
 }
 
-/// The image or `.partial` file to write, checked against the options that need one or the other.
-fn target(args: &RenderArgs, scene: &Scene, options: &Options) -> whitted::Result<Target> {
-    let error = |message: &str| Err(whitted::Error::msg(message));
-    let partial = args.partial
+/// Whether the output is a `.partial` file (`--partial`, or its name) rather than an image.
+pub fn writes_partial(args: &RenderArgs) -> bool {
+    args.partial
         || args
             .output
             .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("partial"));
+            .is_some_and(|e| e.eq_ignore_ascii_case("partial"))
+}
+
+/// The image or `.partial` file to write, checked against the options that need one or the other.
+fn target(args: &RenderArgs, scene: &Scene, options: &Options) -> whitted::Result<Target> {
+    let error = |message: &str| Err(whitted::Error::msg(message));
+    let partial = writes_partial(args);
     if !partial && (args.tiles.is_some() || args.passes_range.is_some()) {
         return error(
             "--tiles and --passes-range render part of a frame: write it to a .partial file (-o part.partial) and combine the parts with `whitted merge`",
         );
-    }
-    if args.resume && !partial {
-        return error("--resume applies to .partial outputs only");
     }
     if partial && args.progressive_out.is_some() {
         return error("--progressive-out writes images; a .partial render cannot keep snapshots");
@@ -153,7 +162,6 @@ fn target(args: &RenderArgs, scene: &Scene, options: &Options) -> whitted::Resul
     Ok(if partial {
         Target::Partial {
             settings: Settings::new(scene, options, args.passes),
-            resume: args.resume,
         }
     } else {
         Target::Image {
@@ -262,11 +270,20 @@ mod tests {
         );
     }
 
+    /// `--threads` is bounded where it is parsed: a count rayon could not start (100000 threads panic
+    /// in the standard library before the pool reports its error) is a usage error.
     #[test]
-    fn refuses_zero_threads_after_a_bad_resolution() {
-        assert_eq!(error("--threads 0"), "--threads must be at least 1");
-        assert!(error("--threads 0 --height 0").starts_with("resolution must be"));
+    fn threads_are_parsed_within_1_to_1024() {
+        for (value, expected) in [
+            ("0", "0 is not in 1..=1024"),
+            ("100000", "100000 is not in 1..=1024"),
+        ] {
+            let parsed = Render::try_parse_from(["render", "--threads", value]);
+            let e = parsed.err().expect("refused").to_string();
+            assert!(e.contains(expected), "{e}");
+        }
         assert_eq!(plan("--threads 3").threads, Some(3));
+        assert_eq!(plan("--threads 1024").threads, Some(1024));
     }
 
     #[test]
@@ -295,8 +312,22 @@ mod tests {
     }
 
     #[test]
-    fn resume_needs_a_partial_output() {
-        assert_eq!(error("--resume"), "--resume applies to .partial outputs only");
+    fn resume_applies_to_images_and_partial_files() {
+        assert!(plan("--resume").resume);
+        assert!(plan("--resume --passes 3 -o out.exr").resume);
+        assert!(plan("--resume --tiles 0/2 --partial").resume);
+        assert!(!plan("").resume);
+    }
+
+    #[test]
+    fn the_tiles_of_a_part_or_of_the_whole_frame() {
+        // 640x480: 40 x 30 tiles of 16 pixels.
+        assert_eq!(plan("").tile_indices(), (0..1200).collect::<Vec<u32>>());
+        assert_eq!(
+            plan("--tiles 1/4 --partial").tile_indices(),
+            tiles::part(640, 480, 1, 4)
+        );
+        assert_eq!(plan("--tiles 1/4 --partial").tile_indices().len(), 300);
     }
 
     #[test]
@@ -366,13 +397,8 @@ mod tests {
             (settings.aperture, settings.focal, settings.passes),
             (2.0, 0.5, 4)
         );
-        assert_eq!(
-            p.target,
-            Target::Partial {
-                settings,
-                resume: true
-            }
-        );
+        assert_eq!(p.target, Target::Partial { settings });
+        assert!(p.resume);
         let (w, h) = (640, 480);
         assert_eq!(p.tiles, Some((1, 4)));
         assert_eq!(p.accumulator().tile_indices(), tiles::part(w, h, 1, 4));

@@ -1,21 +1,24 @@
 //! `whitted render`: a scene to an image, or to a `.partial` file of part of one.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use whitted::accel::{Accel, Prims};
-use whitted::parts::partial::Part;
-use whitted::render::Renderer;
+use whitted::parts::partial::{Part, Settings};
 use whitted::render::progressive::Progressive;
+use whitted::render::{Renderer, memory};
+use whitted::scene::Scene;
 
+use super::Ended;
 use super::args::{
     BuildKind, CameraArgs, FrameArgs, image, load_scene, non_negative, part_of, pass_range, positive,
     thread_pool,
 };
-use super::plan::{Plan, Target};
+use super::outputs;
+use super::plan::{Plan, Target, writes_partial};
 use super::report::{self, Report, ReportArgs};
 
 /// Arguments of `whitted render`.
@@ -23,7 +26,7 @@ use super::report::{self, Report, ReportArgs};
 pub struct RenderArgs {
     /// The scene (.p3f, .nff, .ply, .obj, optionally .gz); the built-in default scene if omitted.
     pub scene: Option<PathBuf>,
-    /// Output image: .png, .ppm (8-bit) or .exr (linear float); or a .partial file (see --tiles).
+    /// Output image: .png, .ppm, .jpg (8-bit) or .exr (linear float); or a .partial file (see --tiles).
     #[arg(short, long, default_value = "render.png")]
     pub output: PathBuf,
     /// Render only part K of N of the image (K from 0; a fixed split of its tiles, balanced by area)
@@ -37,8 +40,9 @@ pub struct RenderArgs {
     /// Write the sums of the passes as a .partial file (implied by an output name ending in .partial).
     #[arg(long)]
     pub partial: bool,
-    /// With a .partial output: if the file is already there, whole, and holds exactly this part of this
-    /// render, do nothing (rerun a job array with --resume to redo only the missing or damaged parts).
+    /// Go on from what an interrupted run of this very render wrote: OUT.partial beside an image, or the
+    /// .partial output itself (a part already whole there is not rendered again, so a job array rerun
+    /// with --resume redoes only the missing, damaged or interrupted parts).
     #[arg(long)]
     pub resume: bool,
     #[command(flatten)]
@@ -89,15 +93,20 @@ pub struct RenderArgs {
     pub report: ReportArgs,
 }
 
-/// Set by Ctrl-C: the render stops at the next tile and keeps the last complete pass.
+/// Set by Ctrl-C: the render stops at the next tile and writes what is finished.
 static STOP: AtomicBool = AtomicBool::new(false);
 
-/// Renders and writes the image.
-pub fn run(args: &RenderArgs) -> whitted::Result<()> {
+/// Renders and writes the image, or, when Ctrl-C stops the render, what is finished.
+pub fn run(args: &RenderArgs) -> whitted::Result<Ended> {
     let start = Instant::now();
+    check_outputs(args)?;
     let mut scene = load_scene(args.scene.as_deref())?;
     warn(&scene.warnings);
     let plan = Plan::new(args, &mut scene)?;
+    // A part's sums cover its tiles only; a whole frame is refused here rather than aborted later.
+    if plan.tiles.is_none() {
+        memory::check(plan.options.width, plan.options.height).map_err(whitted::Error::msg)?;
+    }
     let pool = thread_pool(plan.threads)?;
     let loaded = start.elapsed();
     let build_start = Instant::now();
@@ -109,43 +118,50 @@ pub fn run(args: &RenderArgs) -> whitted::Result<()> {
     // Ctrl-C stops at the next tile; what was written stays whole (files are renamed into place).
     // Installing fails only if another handler is set, as in tests that call `run` twice: keep it.
     let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::Relaxed));
-    if let Target::Image {
-        snapshots: Some(dir), ..
-    } = &plan.target
-    {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| whitted::Error::file(dir, format!("cannot create the directory: {e}")))?;
-    }
 
     let render_start = Instant::now();
-    let mut acc = plan.accumulator();
-    if done_already(&plan, &acc) {
+    let (acc, earlier) = starting_point(&plan, &scene);
+    let resumed = earlier.is_some() || acc.passes() > 0;
+    if done_already(&plan, &acc, earlier.is_some()) {
         if !plan.quiet {
             let output = plan.output.display();
             eprintln!("whitted: {output} holds this part already; not rendered again");
         }
-        return Ok(());
+        return Ok(Ended::Done);
     }
-    render_passes(&plan, &pool, &renderer, &mut acc)?;
+    let progress = Progress::new(&plan, &acc);
+    let rendered = render_passes(&plan, &pool, &renderer, &progress, acc, earlier);
+    progress.bar.finish_and_clear();
+    let (acc, complete) = rendered?;
+    if !complete {
+        return interrupted(&plan, &scene, &acc);
+    }
     let rendered = render_start.elapsed();
-    if acc.passes() == 0 {
-        return Err(whitted::Error::msg(
-            "interrupted before the first pass was complete; nothing written",
-        ));
-    }
     write(&plan, &acc)?;
+    if resumed && matches!(plan.target, Target::Image { .. }) {
+        // The image is whole: the sums it was resumed from are spent.
+        let _ = std::fs::remove_file(stop_file(&plan));
+    }
     if !plan.quiet {
         let threads = pool.current_num_threads();
-        eprintln!(
-            "whitted: {}",
-            summary(&plan, &acc, [loaded, built, rendered], threads)
-        );
+        eprintln!("whitted: {}", summary(&plan, [loaded, built, rendered], threads));
     }
     if let Some(format) = args.report.stats {
         let times = [loaded, built, rendered];
         Report::of_render(args, &plan, &accel, &pool, times, &acc).print(format);
     }
-    Ok(())
+    Ok(Ended::Done)
+}
+
+/// Checks the files the render writes (the output, and the snapshots of `--progressive-out`), before
+/// the scene is loaded.
+fn check_outputs(args: &RenderArgs) -> whitted::Result<()> {
+    let partial = writes_partial(args);
+    outputs::check(&args.output, partial)?;
+    match &args.progressive_out {
+        Some(dir) if !partial && args.passes > 1 => outputs::check_snapshots(dir, &args.output),
+        _ => Ok(()),
+    }
 }
 
 /// Prints `warnings` on stderr, one a line.
@@ -155,84 +171,183 @@ fn warn(warnings: &[String]) {
     }
 }
 
-/// With `--resume`: whether the output holds exactly this part of this render already (a missing or
-/// damaged file, or one of other settings, is rendered again and replaced).
-fn done_already(plan: &Plan, acc: &Progressive) -> bool {
-    let Target::Partial {
-        settings,
-        resume: true,
-    } = &plan.target
-    else {
-        return false;
-    };
-    Part::read(&plan.output).is_ok_and(|done| {
-        done.settings == *settings && done.passes == plan.passes() && done.tiles == acc.tile_indices()
-    })
+/// Where an interrupted render writes its sums and `--resume` looks for them: a `.partial` output
+/// itself, or beside an image `OUT.partial` (`render.png.partial`).
+fn stop_file(plan: &Plan) -> PathBuf {
+    match plan.target {
+        Target::Partial { .. } => plan.output.clone(),
+        Target::Image { .. } => {
+            let mut name = plan.output.clone().into_os_string();
+            name.push(".partial");
+            name.into()
+        }
+    }
 }
 
-/// Renders the plan's passes into `acc`, writing the output every `plan.every` passes before the last;
-/// Ctrl-C stops it after the last complete pass.
+/// Where the render starts: at nothing, or with `--resume` at what the stop file holds of this very
+/// render (same settings, the first passes of this run over its tiles; a file that is missing,
+/// damaged or of another render is ignored). Returns the accumulator to render into and, when the
+/// earlier run stopped in its first pass, the tiles it finished (the accumulator then covers the
+/// others, for that pass).
+fn starting_point(plan: &Plan, scene: &Scene) -> (Progressive, Option<Progressive>) {
+    let fresh = || (plan.accumulator(), None);
+    let Some(part) = plan.resume.then(|| Part::read(&stop_file(plan)).ok()).flatten() else {
+        return fresh();
+    };
+    let (passes, tiles) = (plan.passes(), plan.tile_indices());
+    let settings = Settings::new(scene, &plan.options, plan.total_passes);
+    let ours = part.tiles.iter().all(|t| tiles.binary_search(t).is_ok());
+    let within = part.passes.start == passes.start && part.passes.end <= passes.end;
+    if part.settings != settings || !within || !ours {
+        return fresh();
+    }
+    let say = |what: String| {
+        if !plan.quiet {
+            eprintln!("whitted: resuming from {}: {what}", stop_file(plan).display());
+        }
+    };
+    if part.tiles == tiles {
+        if part.passes.len() < passes.len() {
+            say(format!("{} of {} passes done", part.passes.len(), passes.len()));
+        }
+        return (part.into_progressive(), None);
+    }
+    if part.passes.len() != 1 {
+        return fresh();
+    }
+    say(format!(
+        "{} of {} tiles of the first pass done",
+        part.tiles.len(),
+        tiles.len()
+    ));
+    let rest = tiles.into_iter().filter(|t| part.tiles.binary_search(t).is_err());
+    let (w, h) = (plan.options.width, plan.options.height);
+    let rest = Progressive::for_tiles(w, h, rest.collect());
+    (rest, Some(part.into_progressive()))
+}
+
+/// With `--resume` and a `.partial` output: whether the output holds exactly this part of this render
+/// already, so that there is nothing to render.
+fn done_already(plan: &Plan, acc: &Progressive, earlier: bool) -> bool {
+    let passes = plan.passes();
+    plan.resume
+        && !earlier
+        && matches!(plan.target, Target::Partial { .. })
+        && acc.passes() == passes.end - passes.start
+}
+
+/// `earlier` (the tiles of a first pass an earlier run finished) and `acc` (the rest) as one.
+fn joined(earlier: Option<Progressive>, acc: Progressive) -> Progressive {
+    match earlier {
+        Some(earlier) => earlier.join(acc),
+        None => acc,
+    }
+}
+
+/// Renders the plan's passes into `acc` from where it stands, joining `earlier` to it once the first
+/// pass is whole, and writes the output every `plan.every` passes before the last. Returns the sums
+/// and whether every pass is done: Ctrl-C stops the render at the next tile, keeping the complete
+/// passes, or in the first pass the tiles finished.
 fn render_passes(
     plan: &Plan,
     pool: &rayon::ThreadPool,
     renderer: &Renderer,
-    acc: &mut Progressive,
-) -> whitted::Result<()> {
+    progress: &Progress,
+    mut acc: Progressive,
+    mut earlier: Option<Progressive>,
+) -> whitted::Result<(Progressive, bool)> {
     let passes = plan.passes();
-    for pass in passes.start + 1..=passes.end {
-        let mut label = Vec::new();
-        if let Some((k, n)) = plan.tiles {
-            label.push(format!("part {k}/{n}"));
+    let on_tile = || progress.tile();
+    for pass in passes.start + acc.passes() + 1..=passes.end {
+        progress.bar.set_message(label(plan, pass));
+        if let Err(stopped) = pool.install(|| acc.render_pass(renderer, pass, &on_tile, &STOP)) {
+            if acc.passes() == 0 {
+                acc = acc.keep_finished(&stopped);
+            }
+            return Ok((joined(earlier, acc), false));
         }
-        if plan.total_passes > 1 {
-            label.push(format!("pass {pass}/{}", plan.total_passes));
-        }
-        let label = label.join(", ");
-        if pool
-            .install(|| render_with_progress(renderer, acc, pass, label, plan.quiet))
-            .is_none()
-        {
-            break;
-        }
+        acc = joined(earlier.take(), acc);
         if acc.passes() % plan.every == 0 && pass < passes.end {
-            write(plan, acc)?;
+            write(plan, &acc)?;
         }
     }
-    Ok(())
+    Ok((acc, true))
+}
+
+/// The progress bar's words for pass `pass`: the part and the pass, when there is more than one.
+fn label(plan: &Plan, pass: u32) -> String {
+    let mut label = Vec::new();
+    if let Some((k, n)) = plan.tiles {
+        label.push(format!("part {k}/{n}"));
+    }
+    if plan.total_passes > 1 {
+        label.push(format!("pass {pass}/{}", plan.total_passes));
+    }
+    label.join(", ")
+}
+
+/// After Ctrl-C: writes what is finished and says on stderr, even with `--quiet`, what was written
+/// and how to go on. The sums go to the stop file ([`stop_file`]) for `--resume`; an image render
+/// with whole passes also writes their mean as the image (and its snapshot).
+fn interrupted(plan: &Plan, scene: &Scene, acc: &Progressive) -> whitted::Result<Ended> {
+    let passes = plan.passes();
+    let (done, of) = (acc.passes(), passes.end - passes.start);
+    if done == 0 {
+        eprintln!("whitted: interrupted before any tile was finished; nothing written");
+        return Ok(Ended::Interrupted);
+    }
+    let stop = stop_file(plan);
+    let (tiles, all) = (acc.tile_indices().len(), plan.tile_indices().len());
+    let image = matches!(plan.target, Target::Image { .. });
+    if image {
+        let settings = Settings::new(scene, &plan.options, plan.total_passes);
+        write_sums(plan, &settings, acc, &stop)?;
+    }
+    if !image || tiles == all {
+        write(plan, acc)?;
+    }
+    let stop = stop.display();
+    let what = if tiles < all {
+        let first = match of {
+            1 => String::new(),
+            n => format!(" in the first of {n} passes"),
+        };
+        format!("{first}: wrote the {tiles} of {all} tiles finished to {stop}")
+    } else if image {
+        let out = plan.output.display();
+        format!(" after {done} of {of} passes: wrote their mean to {out} and their sums to {stop}")
+    } else {
+        format!(" after {done} of {of} passes: wrote their sums to {stop}")
+    };
+    eprintln!("whitted: interrupted{what}; the same command with --resume renders the rest");
+    Ok(Ended::Interrupted)
 }
 
 /// Writes the sums or the mean so far to the output and, with `--progressive-out`, a numbered copy.
 fn write(plan: &Plan, acc: &Progressive) -> whitted::Result<()> {
     let (srgb, snapshots) = match &plan.target {
-        Target::Partial { settings, .. } => {
-            let part = Part::new(*settings, acc, plan.passes().start, plan.tiles.unwrap_or((0, 1)));
-            return part.write(&plan.output);
-        }
+        Target::Partial { settings } => return write_sums(plan, settings, acc, &plan.output),
         Target::Image { srgb, snapshots } => (*srgb, snapshots),
     };
     let film = image(&plan.options, acc.film());
     film.write(&plan.output, srgb)?;
     if let Some(dir) = snapshots {
-        let stem = plan.output.file_stem().unwrap_or_default().to_string_lossy();
-        let ext = plan.output.extension().unwrap_or_default().to_string_lossy();
-        let name = format!("{stem}-{:04}.{ext}", acc.passes());
-        film.write(&dir.join(name), srgb)?;
+        film.write(&outputs::snapshot(dir, &plan.output, acc.passes()), srgb)?;
     }
     Ok(())
 }
 
+/// Writes the sums of `acc`, this run's part of the render of `settings`, as a `.partial` file.
+fn write_sums(plan: &Plan, settings: &Settings, acc: &Progressive, path: &Path) -> whitted::Result<()> {
+    let part = Part::new(*settings, acc, plan.passes().start, plan.tiles.unwrap_or((0, 1)));
+    part.write(path)
+}
+
 /// The line printed after a render: size, times (load, build, render), accelerator, kernel, threads,
 /// passes and part.
-fn summary(
-    plan: &Plan,
-    acc: &Progressive,
-    [loaded, built, rendered]: [Duration; 3],
-    threads: usize,
-) -> String {
-    let range = plan.passes();
-    let passes = match range.end - range.start {
+fn summary(plan: &Plan, [loaded, built, rendered]: [Duration; 3], threads: usize) -> String {
+    let passes = match plan.passes().len() {
         1 => String::new(),
-        n if acc.passes() < n => format!(", interrupted after {} of {n} passes", acc.passes()),
         n => format!(", {n} passes"),
     };
     let part = match (plan.tiles, &plan.pass_range) {
@@ -259,38 +374,100 @@ fn summary(
     )
 }
 
-/// Renders pass `pass` into `acc` with a progress bar on stderr that appears only if the pass takes
-/// more than a second; `None` if Ctrl-C stopped it.
-fn render_with_progress(
-    renderer: &Renderer,
-    acc: &mut Progressive,
-    pass: u32,
-    label: String,
-    quiet: bool,
-) -> Option<()> {
-    let total = acc.tile_indices().len() as u64;
-    let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} {msg} [{bar:40}] {percent}% tiles, eta {eta}")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    bar.set_message(label);
-    // Short frames never flash a bar: it is drawn from the first tile finished after this instant.
-    let show_from = Instant::now() + Duration::from_secs(1);
-    let shown = AtomicBool::new(quiet);
-    let done = acc.render_pass(
-        renderer,
-        pass,
-        &|| {
-            bar.inc(1);
-            if !shown.load(Ordering::Relaxed) && Instant::now() >= show_from {
-                shown.store(true, Ordering::Relaxed);
-                bar.set_draw_target(ProgressDrawTarget::stderr());
-            }
-        },
-        &STOP,
-    );
-    bar.finish_and_clear();
-    done.map(|_| ())
+/// One progress bar for the whole render, every tile of every pass left, with an ETA, on stderr. It is
+/// drawn only once the render has taken a second (short renders never flash one), never with
+/// `--quiet`, and only if stderr is a terminal (indicatif hides a bar drawn to anything else).
+struct Progress {
+    bar: ProgressBar,
+    show_from: Instant,
+    shown: AtomicBool,
+}
+
+impl Progress {
+    /// A hidden bar for the render of `plan` from `acc`: the first pass left covers the tiles of
+    /// `acc` (fewer than the plan's when resuming from part of it), the others all of the plan's.
+    fn new(plan: &Plan, acc: &Progressive) -> Progress {
+        let passes = plan.passes();
+        let left = u64::from(passes.end - passes.start - acc.passes());
+        let all = plan.tile_indices().len() as u64;
+        let ticks = match left {
+            0 => 0,
+            n => acc.tile_indices().len() as u64 + (n - 1) * all,
+        };
+        let bar = ProgressBar::with_draw_target(Some(ticks), ProgressDrawTarget::hidden());
+        bar.set_style(
+            ProgressStyle::with_template("{elapsed_precise} {msg} [{wide_bar}] {percent}%, eta {eta}")
+                .expect("valid template")
+                .progress_chars("=> "),
+        );
+        Progress {
+            bar,
+            show_from: Instant::now() + Duration::from_secs(1),
+            shown: AtomicBool::new(plan.quiet),
+        }
+    }
+
+    /// A tile is done: moves the bar, and draws it from the first tile after its first second.
+    fn tile(&self) {
+        self.bar.inc(1);
+        if !self.shown.load(Ordering::Relaxed) && Instant::now() >= self.show_from {
+            self.shown.store(true, Ordering::Relaxed);
+            self.bar.set_draw_target(ProgressDrawTarget::stderr());
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::io::IsTerminal;
+
+    use clap::Parser;
+
+    use super::*;
+
+    /// `whitted render`'s arguments alone, to parse in tests.
+    #[derive(Parser)]
+    struct Render {
+        #[command(flatten)]
+        args: RenderArgs,
+    }
+
+    /// The plan of `whitted render ARGS` for the built-in scene (640x480: 40 x 30 tiles).
+    fn plan(args: &str) -> Plan {
+        let words = std::iter::once("render").chain(args.split_whitespace());
+        let render = Render::try_parse_from(words).expect("arguments clap accepts");
+        let mut scene = load_scene(None).expect("the built-in scene");
+        Plan::new(&render.args, &mut scene).expect("a valid plan")
+    }
+
+    /// One bar for the whole render: every tile of every pass left (a first pass resumed counts the
+    /// tiles it lacks), drawn from the first tile after its first second, unless `--quiet` or stderr
+    /// is not a terminal.
+    #[test]
+    fn one_bar_counts_every_tile_of_every_pass_left() {
+        let p = plan("--passes 60");
+        let progress = Progress::new(&p, &p.accumulator());
+        assert_eq!(progress.bar.length(), Some(60 * 1200));
+        let lacking_200 = Progressive::for_tiles(640, 480, (200..1200).collect());
+        assert_eq!(
+            Progress::new(&p, &lacking_200).bar.length(),
+            Some(1000 + 59 * 1200)
+        );
+        let part = plan("--passes 4 --passes-range 1..3 --tiles 1/4 --partial");
+        assert_eq!(
+            Progress::new(&part, &part.accumulator()).bar.length(),
+            Some(2 * 300)
+        );
+
+        assert!(progress.bar.is_hidden(), "not in its first second");
+        for (args, shown) in [("", std::io::stderr().is_terminal()), ("-q", false)] {
+            let p = plan(args);
+            let mut progress = Progress::new(&p, &p.accumulator());
+            progress.show_from = Instant::now();
+            progress.tile();
+            assert_eq!(progress.bar.position(), 1);
+            assert_eq!(!progress.bar.is_hidden(), shown, "{args}");
+            progress.bar.finish_and_clear();
+        }
+    }
 }

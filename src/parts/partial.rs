@@ -268,6 +268,13 @@ impl Part {
             counts,
         })
     }
+
+    /// The accumulator of this part's tiles and passes, to render more of the same render into.
+    pub fn into_progressive(self) -> Progressive {
+        let passes = self.passes.end - self.passes.start;
+        let Settings { width, height, .. } = self.settings;
+        Progressive::with_sums(width, height, self.tiles, self.sums, passes)
+    }
 }
 
 /// [`Part::read`], its error without the path.

@@ -215,8 +215,12 @@ impl<'a> Renderer<'a> {
         stop: &AtomicBool,
     ) -> Option<(Film, RayCounts)> {
         let (w, h) = (self.options.width, self.options.height);
+        let rendered = self.render_tiles(pass, &tiles::tiles(w, h), on_tile, stop);
+        if !rendered.is_complete() {
+            return None;
+        }
         let mut film = Film::new(w, h);
-        let rays = self.render_tiles(pass, &tiles::tiles(w, h), on_tile, stop, |_, tile, buf| {
+        rendered.for_each(|tile, buf| {
             for y in tile.y0..tile.y1 {
                 let row = (y * w) as usize;
                 let src = ((y - tile.y0) * TILE) as usize;
@@ -224,27 +228,24 @@ impl<'a> Renderer<'a> {
                 film.pixels[row + tile.x0 as usize..row + tile.x0 as usize + n]
                     .copy_from_slice(&buf[src..src + n]);
             }
-        })?;
-        Some((film, rays))
+        });
+        Some((film, rendered.rays()))
     }
 
-    /// Renders pass `pass` of `tiles` only (a part of the frame), in parallel, then hands each tile's
-    /// pixels to `sink` in the order of `tiles`, as `(index in tiles, tile, pixels)` with the pixels
-    /// row-major at a stride of [`TILE`]. A pixel's colour depends only on the seed, the pixel and the
-    /// pass, so any split of the tiles renders the same pixels. `on_tile` and `stop` are as for
-    /// [`Renderer::render_pass`]; `None` if stopped, and then `sink` has seen nothing.
+    /// Renders pass `pass` of `tiles` only (a part of the frame), in parallel. A pixel's colour depends
+    /// only on the seed, the pixel and the pass, so any split of the tiles renders the same pixels.
+    /// `on_tile` is as for [`Renderer::render_pass`]; once `stop` is set, the tiles not yet started are
+    /// skipped and the [`TilePass`] holds the ones finished, for a caller that keeps them.
     pub fn render_tiles(
         &self,
         pass: u32,
         tiles: &[Tile],
         on_tile: &(dyn Fn() + Sync),
         stop: &AtomicBool,
-        mut sink: impl FnMut(usize, Tile, &[Vec3]),
-    ) -> Option<RayCounts> {
+    ) -> TilePass {
         // Each tile fills a fixed-size buffer; the sample pattern is allocated once per tile and
         // reused, so nothing is allocated per pixel or per ray.
-        type Done = (Tile, [Vec3; (TILE * TILE) as usize], RayCounts);
-        let done: Option<Vec<Done>> = tiles
+        let tiles = tiles
             .par_iter()
             .map(|&tile| {
                 if stop.load(Ordering::Relaxed) {
@@ -268,12 +269,7 @@ impl<'a> Renderer<'a> {
                 Some((tile, buf, rays))
             })
             .collect();
-        let mut rays = RayCounts::default();
-        for (i, (tile, buf, tile_rays)) in done?.iter().enumerate() {
-            rays += *tile_rays;
-            sink(i, *tile, buf);
-        }
-        Some(rays)
+        TilePass { tiles }
     }
 
     /// Shades `tile` for pass `pass`, packet by packet (pixels outside the image are inactive lanes),
@@ -323,6 +319,46 @@ impl<'a> Renderer<'a> {
                     buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] = sums[k] / self.samples() as f32;
                 }
             }
+        }
+    }
+}
+
+/// A tile's pixels, row-major at a stride of [`TILE`], and the rays they took.
+type TileDone = (Tile, [Vec3; (TILE * TILE) as usize], RayCounts);
+
+/// A pass over some tiles as [`Renderer::render_tiles`] left it: every tile's pixels, or, if it was
+/// stopped, those of the tiles finished before the stop (so that an interrupted render can keep them).
+#[derive(Debug)]
+pub struct TilePass {
+    /// Per tile asked for, in order: its pixels, or `None` if the stop skipped it.
+    tiles: Vec<Option<TileDone>>,
+}
+
+impl TilePass {
+    /// Whether every tile was rendered (the pass was not stopped, or stopped after its last tile).
+    pub fn is_complete(&self) -> bool {
+        self.tiles.iter().all(Option::is_some)
+    }
+
+    /// Whether each tile asked for was rendered, in order.
+    pub fn finished(&self) -> impl Iterator<Item = bool> + '_ {
+        self.tiles.iter().map(Option::is_some)
+    }
+
+    /// The rays the finished tiles traced.
+    pub fn rays(&self) -> RayCounts {
+        let mut rays = RayCounts::default();
+        for (_, _, r) in self.tiles.iter().flatten() {
+            rays += *r;
+        }
+        rays
+    }
+
+    /// Hands each finished tile and its pixels (row-major at a stride of [`TILE`]) to `sink`, in the
+    /// order the tiles were asked for.
+    pub fn for_each(&self, mut sink: impl FnMut(Tile, &[Vec3])) {
+        for (tile, buf, _) in self.tiles.iter().flatten() {
+            sink(*tile, buf);
         }
     }
 }

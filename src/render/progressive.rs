@@ -16,6 +16,7 @@ use glam::Vec3;
 
 use super::Renderer;
 use super::film::Film;
+use super::frame::TilePass;
 use super::tiles::{self, Tile};
 use super::whitted::RayCounts;
 
@@ -61,37 +62,144 @@ impl Progressive {
         }
     }
 
-    /// Folds in pass `pass` (from 1) of the renderer, which must render this size; `None`, with
-    /// nothing folded in, if `stop` was set (see [`Renderer::render_pass`]).
+    /// The sums `sums` of `passes` passes over the tiles `indices` of a `width` × `height` frame, laid
+    /// out as [`Progressive::sums`] gives them: an accumulator read back from a `.partial` file, to go on
+    /// from.
+    ///
+    /// # Panics
+    /// As [`Progressive::for_tiles`], or if `sums` does not hold one entry per pixel of those tiles.
+    pub fn with_sums(width: u32, height: u32, indices: Vec<u32>, sums: Vec<[f64; 3]>, passes: u32) -> Self {
+        let mut progressive = Progressive::for_tiles(width, height, indices);
+        assert_eq!(sums.len(), progressive.sums.len(), "one sum per pixel");
+        progressive.sums = sums;
+        progressive.passes = passes;
+        progressive
+    }
+
+    /// Folds in pass `pass` (from 1) of the renderer, which must render this size. If `stop` was set,
+    /// nothing is folded in and the stopped pass is handed back with the tiles it finished (see
+    /// [`Renderer::render_tiles`] and [`Progressive::keep_finished`]).
     pub fn render_pass(
         &mut self,
         renderer: &Renderer,
         pass: u32,
         on_tile: &(dyn Fn() + Sync),
         stop: &AtomicBool,
-    ) -> Option<RayCounts> {
+    ) -> Result<RayCounts, TilePass> {
         assert_eq!(
             renderer.size(),
             (self.width, self.height),
             "a pass of another size"
         );
+        let rendered = renderer.render_tiles(pass, &self.tiles, on_tile, stop);
+        if !rendered.is_complete() {
+            return Err(rendered);
+        }
+        self.fold(&rendered);
+        self.passes += 1;
+        self.rays += rendered.rays();
+        Ok(rendered.rays())
+    }
+
+    /// What a first pass over these tiles that was stopped finished: the tiles done, over that one pass
+    /// (no tile and no pass if none was done). A later pass stopped cannot be kept so, as its tiles
+    /// would hold one pass more than the others.
+    ///
+    /// # Panics
+    /// If a pass was folded in already, or `stopped` is not a pass over these tiles.
+    pub fn keep_finished(self, stopped: &TilePass) -> Progressive {
+        assert_eq!(self.passes, 0, "only a first pass can be kept in part");
+        assert_eq!(
+            stopped.finished().count(),
+            self.indices.len(),
+            "a pass over these tiles"
+        );
+        let finished: Vec<u32> = self
+            .indices
+            .iter()
+            .zip(stopped.finished())
+            .filter_map(|(&i, done)| done.then_some(i))
+            .collect();
+        let mut kept = Progressive::for_tiles(self.width, self.height, finished);
+        kept.fold(stopped);
+        kept.passes = u32::from(!kept.indices.is_empty());
+        kept.rays = stopped.rays();
+        kept
+    }
+
+    /// Adds the tiles `rendered` finished to the sums of these tiles, which must be those tiles in the
+    /// same order.
+    fn fold(&mut self, rendered: &TilePass) {
         let mut at = 0;
-        let sums = &mut self.sums;
-        let rays = renderer.render_tiles(pass, &self.tiles, on_tile, stop, |_, tile, buf| {
+        rendered.for_each(|tile, buf| {
             let w = (tile.x1 - tile.x0) as usize;
             for row in 0..(tile.y1 - tile.y0) as usize {
                 let src = &buf[row * tiles::TILE as usize..][..w];
-                for (sum, c) in sums[at..at + w].iter_mut().zip(src) {
+                for (sum, c) in self.sums[at..at + w].iter_mut().zip(src) {
                     for (s, v) in sum.iter_mut().zip(c.to_array()) {
                         *s += f64::from(v);
                     }
                 }
                 at += w;
             }
-        })?;
-        self.passes += 1;
-        self.rays += rays;
-        Some(rays)
+        });
+    }
+
+    /// The tiles of `self` and `other`, accumulators of one frame over the same passes and disjoint
+    /// tiles, as one: a render resumed from the finished tiles of its first pass ([`Progressive::keep_finished`])
+    /// joins them to the rest. An accumulator of no pass (nothing finished) adds nothing.
+    ///
+    /// # Panics
+    /// If the frames or the passes differ, or the tiles overlap.
+    pub fn join(self, other: Progressive) -> Progressive {
+        if other.passes == 0 {
+            return self;
+        }
+        if self.passes == 0 {
+            return other;
+        }
+        assert_eq!(
+            (self.size(), self.passes),
+            (other.size(), other.passes),
+            "parts of one render"
+        );
+        let mut indices: Vec<u32> = self.indices.iter().chain(&other.indices).copied().collect();
+        indices.sort_unstable();
+        let mut joined = Progressive::for_tiles(self.width, self.height, indices);
+        joined.passes = self.passes;
+        joined.rays = self.rays;
+        joined.rays += other.rays;
+        // Each tile's sums, found by walking both sources in tile order.
+        let (mut a, mut b) = (
+            self.tile_sums().into_iter().peekable(),
+            other.tile_sums().into_iter(),
+        );
+        let mut at = 0;
+        for &i in &joined.indices {
+            let source: &mut dyn Iterator<Item = _> = if a.peek().is_some_and(|(j, _)| *j == i) {
+                &mut a
+            } else {
+                &mut b
+            };
+            let (_, sums) = source.next().expect("every tile from one of the two");
+            joined.sums[at..at + sums.len()].copy_from_slice(sums);
+            at += sums.len();
+        }
+        joined
+    }
+
+    /// Each tile's index and its pixels' sums.
+    fn tile_sums(&self) -> Vec<(u32, &[[f64; 3]])> {
+        let mut rest = &self.sums[..];
+        self.indices
+            .iter()
+            .zip(&self.tiles)
+            .map(|(&i, &t)| {
+                let (sums, tail) = rest.split_at(area(t));
+                rest = tail;
+                (i, sums)
+            })
+            .collect()
     }
 
     /// Passes folded in so far.

@@ -168,7 +168,7 @@ pub(crate) fn render_loop(
             &signals.changed
         };
         let start = Instant::now();
-        let Some(rays) = pool.install(|| sums.render_pass(&renderer, pass, &|| {}, stop)) else {
+        let Ok(rays) = pool.install(|| sums.render_pass(&renderer, pass, &|| {}, stop)) else {
             continue;
         };
         let seconds = start.elapsed().as_secs_f64();
