@@ -6,6 +6,8 @@ pub mod obj;
 pub mod p3f;
 pub mod ply;
 pub mod polygon;
+#[cfg(test)]
+mod polygon_checks;
 pub mod store;
 
 use std::path::Path;

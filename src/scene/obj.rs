@@ -208,7 +208,7 @@ mod tests {
 
     use super::*;
     use crate::error::Location;
-    use crate::scene::polygon::triangulate;
+    use crate::scene::polygon_checks::{assert_quad_split, assert_triangulates};
 
     fn load_bytes(name: &str, bytes: &[u8]) -> Result<MeshData> {
         let dir = tempfile::tempdir().unwrap();
@@ -223,36 +223,20 @@ mod tests {
 
     const SQUARE: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
 
-    /// The triangles `triangulate` gives for the polygon of mesh vertices `first..first + n`.
-    fn polygon(positions: &[Vec3], first: u32, n: u32) -> Vec<[u32; 3]> {
-        let mut local = vec![];
-        triangulate(&positions[first as usize..(first + n) as usize], &mut local);
-        local.iter().map(|t| t.map(|k| k + first)).collect()
-    }
+    /// An L-shaped hexagon in the plane z = 1, counter-clockwise seen from +z, of area 3: the unit squares
+    /// [0, 2] x [0, 1] and [0, 1] x [1, 2]. It starts at (2, 0), from where a fan would wind its second
+    /// triangle backwards across the notch [1, 2] x [1, 2] (a fan from (0, 0) or (1, 1) would be right).
+    const L_SHAPE: &str = "v 2 0 1\nv 2 1 1\nv 1 1 1\nv 1 2 1\nv 0 2 1\nv 0 0 1\n";
 
     #[test]
     fn triangles_quads_and_concave_polygons() {
-        // An L-shaped hexagon: a fan from its first corner would cover the notch.
-        let l_shape = "v 0 0 1\nv 2 0 1\nv 2 1 1\nv 1 1 1\nv 1 2 1\nv 0 2 1\n";
-        let mesh = load_text(&format!("{SQUARE}{l_shape}f 1 2 3\nf 1 2 3 4\nf 5 6 7 8 9 10\n")).unwrap();
+        let mesh = load_text(&format!("{SQUARE}{L_SHAPE}f 1 2 3\nf 1 2 3 4\nf 5 6 7 8 9 10\n")).unwrap();
         assert_eq!(mesh.positions.len(), 10);
-        assert_eq!(mesh.positions[8], Vec3::new(1.0, 2.0, 1.0));
-        let mut want = vec![[0, 1, 2]];
-        want.extend(polygon(&mesh.positions, 0, 4));
-        want.extend(polygon(&mesh.positions, 4, 6));
-        assert_eq!(mesh.triangles, want);
+        assert_eq!(mesh.positions[7], Vec3::new(1.0, 2.0, 1.0));
         assert_eq!(mesh.triangles.len(), 1 + 2 + 4);
-        let area: f32 = mesh.triangles[3..]
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
-                (b - a).cross(c - a).length() / 2.0
-            })
-            .sum();
-        assert!(
-            (area - 3.0).abs() < 1e-6,
-            "the L covers 3 unit squares, not {area}"
-        );
+        assert_eq!(mesh.triangles[0], [0, 1, 2]);
+        assert_quad_split(&mesh.triangles[1..3], [0, 1, 2, 3]);
+        assert_triangulates(&mesh.positions, &[4, 5, 6, 7, 8, 9], &mesh.triangles[3..], 3.0);
     }
 
     #[test]
@@ -314,16 +298,15 @@ mod tests {
     /// before the first smooth one is recorded as flat.
     #[test]
     fn polygon_normals_follow_the_triangulation() {
-        let l_shape = "v 0 0 1\nv 2 0 1\nv 2 1 1\nv 1 1 1\nv 1 2 1\nv 0 2 1\n";
         let normals = "vn 1 0 1\nvn 2 0 1\nvn 3 0 1\nvn 4 0 1\nvn 5 0 1\nvn 6 0 1\n";
         // Vertex i (1-based) has normal 7 - i.
         let mesh = load_text(&format!(
-            "{l_shape}{normals}f 1 2 3\nf 1//6 2//5 3//4 4//3 5//2 6//1\n"
+            "{L_SHAPE}{normals}f 1 2 3\nf 1//6 2//5 3//4 4//3 5//2 6//1\n"
         ))
         .unwrap();
-        let mut want = vec![[0, 1, 2]];
-        want.extend(polygon(&mesh.positions, 0, 6));
-        assert_eq!(mesh.triangles, want);
+        assert_eq!(mesh.triangles.len(), 5);
+        assert_eq!(mesh.triangles[0], [0, 1, 2]);
+        assert_triangulates(&mesh.positions, &[0, 1, 2, 3, 4, 5], &mesh.triangles[1..], 3.0);
         assert_eq!(mesh.normal_triangles.len(), 5);
         assert_eq!(mesh.normal_triangles[0], None);
         for k in 1..5 {

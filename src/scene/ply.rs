@@ -729,6 +729,7 @@ mod tests {
     use flate2::write::GzEncoder;
 
     use super::*;
+    use crate::scene::polygon_checks::assert_quad_split;
 
     /// A value of the test mesh, written as text or as bytes of its type.
     #[derive(Clone, Copy)]
@@ -838,40 +839,48 @@ end_header
         load_bytes(text.as_bytes())
     }
 
-    fn expected() -> MeshData {
-        let positions = vec![
+    /// The positions of [`rows`].
+    fn positions() -> Vec<Vec3> {
+        vec![
             Vec3::new(0.0, 0.0, 0.0),
             Vec3::new(1.0, 0.0, 0.0),
             Vec3::new(1.0, 1.0, 0.5),
             Vec3::new(0.0, 1.0, 0.5),
             Vec3::new(2.0, 0.5, 0.25),
-        ];
-        // The quad's own corners are vertices 0..4, so its local indices are the mesh's.
-        let mut triangles = vec![];
-        triangulate(&positions[..4], &mut triangles);
-        triangles.push([1, 4, 2]);
-        MeshData {
-            positions,
-            triangles,
-            ..MeshData::default()
-        }
+        ]
+    }
+
+    /// Asserts that `mesh` has the positions and faces of [`rows`]: the quad 0-1-2-3 split along either
+    /// diagonal, then the triangle 1-4-2.
+    #[track_caller]
+    fn assert_faces(mesh: &MeshData) {
+        assert_eq!(mesh.positions, positions());
+        assert_eq!(mesh.triangles.len(), 3, "{:?}", mesh.triangles);
+        assert_quad_split(&mesh.triangles[..2], [0, 1, 2, 3]);
+        assert_eq!(mesh.triangles[2], [1, 4, 2]);
+    }
+
+    /// Asserts that `mesh` is the mesh of [`rows`]: its faces and no normals.
+    #[track_caller]
+    fn assert_expected(mesh: &MeshData) {
+        assert_faces(mesh);
+        assert!(mesh.normals.is_empty() && mesh.normal_triangles.is_empty());
     }
 
     #[test]
     fn ascii_and_binary_agree() {
         let rows = rows();
-        let want = expected();
-        assert_eq!(want.triangles.len(), 3);
-        assert_eq!(load_bytes(&ascii(&rows)).unwrap(), want);
-        assert_eq!(load_bytes(&binary(&rows, false)).unwrap(), want);
-        assert_eq!(load_bytes(&binary(&rows, true)).unwrap(), want);
+        let mesh = load_bytes(&ascii(&rows)).unwrap();
+        assert_expected(&mesh);
+        assert_eq!(load_bytes(&binary(&rows, false)).unwrap(), mesh);
+        assert_eq!(load_bytes(&binary(&rows, true)).unwrap(), mesh);
     }
 
     #[test]
     fn gzipped() {
         let rows = rows();
-        assert_eq!(load_bytes(&gzip(&ascii(&rows))).unwrap(), expected());
-        assert_eq!(load_bytes(&gzip(&binary(&rows, true))).unwrap(), expected());
+        assert_expected(&load_bytes(&gzip(&ascii(&rows))).unwrap());
+        assert_expected(&load_bytes(&gzip(&binary(&rows, true))).unwrap());
     }
 
     /// Header and body can use CR LF line breaks; the binary body starts after the LF.
@@ -879,14 +888,14 @@ end_header
     fn crlf_header() {
         let rows = rows();
         let text = String::from_utf8(ascii(&rows)).unwrap().replace('\n', "\r\n");
-        assert_eq!(load_text(&text).unwrap(), expected());
+        assert_expected(&load_text(&text).unwrap());
         let bytes = binary(&rows, false);
         let body = bytes.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
         let header = String::from_utf8(bytes[..body].to_vec())
             .unwrap()
             .replace('\n', "\r\n");
         let bytes = [header.as_bytes(), &bytes[body..]].concat();
-        assert_eq!(load_bytes(&bytes).unwrap(), expected());
+        assert_expected(&load_bytes(&bytes).unwrap());
     }
 
     #[test]
@@ -1178,11 +1187,9 @@ end_header
         for (got, want) in mesh.normals.iter().zip(want) {
             assert!((*got - want).length() < 1e-6, "{:?}", mesh.normals);
         }
-        let want = expected();
-        assert_eq!(mesh.positions, want.positions);
-        assert_eq!(mesh.triangles, want.triangles);
+        assert_faces(mesh);
         // Per-vertex normals: a smooth triangle's normal indices are its vertex indices.
-        let quad = &want.triangles[..2];
+        let quad = &mesh.triangles[..2];
         assert_eq!(mesh.normal_triangles, [Some(quad[0]), Some(quad[1]), None]);
     }
 
