@@ -1,5 +1,6 @@
 //! Meshes that carry normals (OBJ `vn`, PLY `nx ny nz`) become smooth triangles wherever a mesh enters a
-//! scene (`include`, a bare mesh given as the scene), and render with the interpolated normal.
+//! scene (`include`, a bare mesh given as the scene), and render with the interpolated normal, as do the
+//! p3f/NFF `pp` patches (a polygon with a normal per vertex).
 //!
 //! The render check follows `shading.rs`: a scene rendered through brute force (`AccelKind::None`), one
 //! pixel compared with the Blinn-Phong value worked out in f64 from the documented model, C_light ·
@@ -174,6 +175,56 @@ fn smooth_quad_renders_with_the_interpolated_normal() {
 
     let m = scene.materials[0];
     let smooth = DVec3::new(1.0, -1.0, 2.0) / 6f64.sqrt();
+    let (p, v, light, color) = (
+        p.as_dvec3(),
+        DVec3::Z,
+        light.as_dvec3(),
+        DVec3::new(1.0, 0.9, 0.8),
+    );
+    let want = blinn_phong(&m, p, smooth, v, light, color);
+    let flat = blinn_phong(&m, p, DVec3::Z, v, light, color);
+    let got = got.as_dvec3();
+    for i in 0..3 {
+        let err = (got[i] - want[i]).abs();
+        assert!(
+            err <= 1e-5 * want[i],
+            "channel {i}: got {got}, want {want} (flat {flat})"
+        );
+    }
+    assert!(
+        (want - flat).abs().min_element() > 0.05,
+        "the check must tell smooth from flat: {want} vs {flat}"
+    );
+}
+
+/// A p3f/NFF `pp` patch (a polygon with a normal per vertex) renders with the interpolated normal too:
+/// the quad with corners (±1, ±1, 1), counter-clockwise seen from +z, whose corner normals are (x, y, 1)
+/// at corner (x, y) (normalised when read: each is (±1, ±1, 1)/√3). The corner (1, 1) gives its normal as
+/// (−1, −1, −1), against the winding, and the renderer turns it to the geometric normal's side first
+/// (`docs/scene-format.md`). These normals are an affine function of the position, n = (x, y, 1)/√3, so
+/// the interpolation gives the same normal in either triangle of either diagonal split: at P = (0.5,
+/// −0.25, 1), seen straight down through the centre pixel (on neither diagonal), it is |(0.5, −0.25, 1)| =
+/// (2, −1, 4)/√21, against the flat (0, 0, 1).
+#[test]
+fn smooth_pp_patch_renders_with_the_interpolated_normal() {
+    let (_guard, dir) = folder(&[]);
+    let p = Vec3::new(0.5, -0.25, 1.0);
+    let light = Vec3::new(3.5, -1.75, 5.0);
+    let patch = "pp 4\n-1 -1 1  -1 -1 1\n1 -1 1  1 -1 1\n1 1 1  -1 -1 -1\n-1 1 1  -1 1 1\n";
+    let path = dir.join("scene.p3f");
+    std::fs::write(&path, scene_text(p, light, patch)).unwrap();
+    let scene = whitted::scene::load(&path).unwrap();
+    assert_eq!(scene.triangles.len(), 2);
+    assert_eq!(scene.triangles.vertex_normals.len(), 2, "two smooth triangles");
+    let accel = Accel::build(Prims::new(&scene), AccelKind::None);
+    let options = Options {
+        max_depth: 0,
+        ..Options::new(&scene)
+    };
+    let got = Renderer::new(&scene, &accel, options).pixel(16, 16);
+
+    let m = scene.materials[0];
+    let smooth = DVec3::new(2.0, -1.0, 4.0) / 21f64.sqrt();
     let (p, v, light, color) = (
         p.as_dvec3(),
         DVec3::Z,
