@@ -147,9 +147,15 @@ impl<'a> Renderer<'a> {
         }
         let (p, uv) = (pattern.pixel[s as usize], pattern.light[s as usize]);
         let mut sample = self.pixel_sample(pass, index, s, uv);
-        // The lens point is drawn even for a pinhole, so that a sample's random numbers do not depend
-        // on the camera.
-        let lens = sample.rng.in_unit_disc();
+        // The lens point's two numbers are drawn even for a pinhole, so that a sample's later random
+        // numbers do not depend on the camera; only a lens maps them onto the disc (the map's sine
+        // and cosine were a third of a pinhole camera ray's instructions: profiles/frame.txt).
+        let lens = if self.camera.has_lens() {
+            sample.rng.in_unit_disc()
+        } else {
+            sample.rng.next2();
+            Vec2::ZERO
+        };
         (self.camera.lens_ray(x + p.x, y + p.y, lens), sample)
     }
 

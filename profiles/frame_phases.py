@@ -1,0 +1,103 @@
+"""Splits a frame's callgrind profile by phase (profiles/frame.sh).
+
+Reads `callgrind_annotate --inclusive=yes --tree=caller` output and the driver's ray counts, and prints
+each phase's inclusive instructions, its share of the frame and its instructions per ray of its kind.
+A phase is the inclusive cost of the functions it runs in: the accelerator's four verbs are never
+inlined into the integrator (the packet verbs reach their AVX2 kernel through a `#[target_feature]`
+function, the single-ray verbs are too big), so traversal is measured exactly, and its ray kind is
+told by the caller: the integrator's packet routine at its first level traces the camera rays, its
+recursive levels (callgrind's `'2`) the reflected and refracted ones.
+"""
+
+import re
+import sys
+
+LINE = re.compile(r"^\s*([\d,]+)\s+\(\s*[\d.]+%\)\s+(<|\*)?\s*(\S.*)$")
+
+
+def name(text):
+    """The function of a `file:function [object] (Nx)` field."""
+    text = re.sub(r" \[[^]]*\]$", "", text.strip())
+    text = re.sub(r" \([\d,]+x\)$", "", text)
+    return text.split(":", 1)[1] if ":" in text else text
+
+
+def blocks(path):
+    """Each function's inclusive count and its callers' counts, from the entry with the largest count
+    (callgrind_annotate lists a function once per source file its lines come from)."""
+    functions, callers, current = {}, [], []
+    total = 0
+    for line in open(path, encoding="utf-8", errors="replace"):
+        if "PROGRAM TOTALS" in line:
+            total = int(line.split()[0].replace(",", ""))
+            continue
+        m = LINE.match(line)
+        if not m:
+            current = []
+            continue
+        count, mark, rest = int(m.group(1).replace(",", "")), m.group(2), m.group(3)
+        if mark == "<":
+            current.append((name(rest), count))
+        elif mark == "*":
+            f = name(rest)
+            if count > functions.get(f, (0, []))[0]:
+                functions[f] = (count, current)
+            current = []
+    return total, functions
+
+
+def main():
+    total, functions = blocks(sys.argv[1])
+    counts = {}
+    for line in open(sys.argv[2]):
+        words = line.split()
+        if words and words[0] == "kinds":
+            counts = {words[i]: int(words[i + 1]) for i in range(1, len(words), 2)}
+
+    def inclusive(suffix):
+        return sum(c for f, (c, _) in functions.items() if f.endswith(suffix))
+
+    def called_by(suffix, caller_test):
+        return sum(
+            n
+            for f, (_, callers) in functions.items()
+            if f.endswith(suffix)
+            for caller, n in callers
+            if caller_test(caller)
+        )
+
+    first_level = lambda c: c.endswith("shade_packet")  # noqa: E731
+    deeper = lambda c: "shade_packet'" in c  # noqa: E731
+    phases = [
+        ("camera rays (Renderer::camera_sample)", inclusive("::camera_sample"), "primary"),
+        ("sample patterns (PixelPattern::fill)", inclusive("PixelPattern::fill"), "primary"),
+        ("traversal, camera rays (packets)", called_by("Accel::intersect_packet", first_level), "primary"),
+        (
+            "traversal, shadow rays (packets and single)",
+            inclusive("Accel::occluded_packet") + inclusive("Accel::occluded"),
+            "shadow",
+        ),
+        (
+            "traversal, reflected and refracted rays (packets and single)",
+            called_by("Accel::intersect_packet", deeper) + inclusive("Accel::intersect"),
+            "secondary",
+        ),
+        ("hit points: position, normals, uv (Prims::surface)", inclusive("Prims::surface"), "all"),
+    ]
+    rays = sum(counts.values())
+    measured = sum(n for _, n, _ in phases)
+    phases.append(("shading, the integrator, tiles and film (the rest)", total - measured, "all"))
+    print()
+    print(
+        f"## frame: {rays} rays ({counts.get('primary', 0)} camera, {counts.get('shadow', 0)} shadow, "
+        f"{counts.get('secondary', 0)} reflected and refracted), {total} instructions, "
+        f"{total // max(rays, 1)} per ray"
+    )
+    print()
+    print(f"{'phase':<62} {'instructions':>13} {'share':>6} {'per ray':>8}  (of)")
+    for label, n, kind in phases:
+        of = rays if kind == "all" else counts.get(kind, 0)
+        print(f"{label:<62} {n:>13,} {100 * n / total:>5.1f}% {n / max(of, 1):>8.0f}  ({kind})")
+
+
+main()
