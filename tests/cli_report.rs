@@ -162,11 +162,12 @@ fn info_json_with_a_bvh_gives_the_trees_shape() {
         assert_eq!(keys(a), set(&documented), "{kind}");
         assert_eq!(a["kind"], kind);
         let simd = a["simd"].as_str().unwrap();
-        let wide = ["avx2", "portable"].contains(&simd);
-        assert!(
-            if kind == "bvh2" { simd == "scalar" } else { wide },
-            "{kind}: {simd}"
-        );
+        let want = if kind == "bvh2" {
+            "scalar"
+        } else {
+            common::best_simd()
+        };
+        assert_eq!(simd, want, "{kind}");
         let sizes: Vec<u64> = a["leaf_sizes"].as_array().unwrap().iter().map(int).collect();
         assert_eq!(sizes.len(), 17, "sizes 0 to 15, then 16 or more");
         let (leaves, nodes, depth) = (int(&a["leaves"]), int(&a["nodes"]), int(&a["depth"]));
@@ -368,7 +369,7 @@ fn bench_json_has_every_documented_key_with_the_runs_values() {
         (v["accel"].as_str(), v["kernel"].as_str()),
         (Some("bvh4"), Some("single"))
     );
-    assert!(["avx2", "portable"].contains(&v["simd"].as_str().unwrap()));
+    assert_eq!(v["simd"].as_str(), Some(common::best_simd()));
     assert!(float(&v["load_s"]) >= 0.0 && float(&v["build_s"]) >= 0.0);
     let n = check_rays(&v, "rays_per_frame");
     // 32x32 camera rays; tetra's one material neither reflects nor refracts; one light.

@@ -233,6 +233,7 @@ pub fn accel_name(accel: &Accel) -> &'static str {
 /// time.
 pub fn simd_name(accel: &Accel) -> &'static str {
     match accel.simd() {
+        Some(Simd::Avx512) => "avx512",
         Some(Simd::Avx2) => "avx2",
         Some(Simd::Portable) => "portable",
         None => "scalar",

@@ -117,15 +117,21 @@ impl Contestant<'_> {
 }
 
 /// The instruction sets the wide BVHs' kernels have, in the order they are listed.
-const SIMD: [(Simd, &str); 2] = [(Simd::Avx2, "avx2"), (Simd::Portable, "portable")];
+const SIMD: [(Simd, &str); 3] = [
+    (Simd::Avx512, "avx512"),
+    (Simd::Avx2, "avx2"),
+    (Simd::Portable, "portable"),
+];
 
 /// Every build of [`BUILDS`] over `prims`, each built once (on the current rayon pool), the wide BVHs at
 /// their default build once per instruction set this CPU has (copies of one build). On a CPU without
-/// AVX2 it says, on stderr, that only the portable kernels are there; a set the CPU has but a structure
+/// AVX2 or AVX-512 it says, on stderr, which kernels are not there; a set the CPU has but a structure
 /// refuses is a bug, and panics.
 pub fn all(prims: Prims<'_>) -> Vec<Contestant<'_>> {
     if !Simd::Avx2.available() {
         eprintln!("this CPU has no AVX2: the wide BVHs run their portable kernels only");
+    } else if !Simd::Avx512.available() {
+        eprintln!("this CPU has no AVX-512: the wide BVHs' AVX-512 kernels are not tested here");
     }
     let mut out = Vec::new();
     for b in &BUILDS {

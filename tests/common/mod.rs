@@ -59,3 +59,19 @@ pub fn scene_files(dir: &Path) -> Vec<PathBuf> {
     out.sort();
     out
 }
+
+/// The instruction set the wide BVHs' kernels should pick on this CPU, asked of the CPU here rather
+/// than of the crate: `avx512` (AVX-512 F and VL with AVX2 and FMA), `avx2` (with FMA) or `portable`.
+pub fn best_simd() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let avx2 = is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma");
+        if avx2 && is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl") {
+            return "avx512";
+        }
+        if avx2 {
+            return "avx2";
+        }
+    }
+    "portable"
+}

@@ -2,17 +2,19 @@
 //! it, and the one run-time choice of instruction set.
 //!
 //! A [`Lanes<N>`] value is `N` floats side by side: `wide`'s `f32x4` (one SSE register), `wide`'s
-//! `f32x8` (two SSE halves, so any x86-64 CPU) and [`Avx8`] (one AVX2 register). The single-ray kernel
+//! `f32x8` (two SSE halves, so any x86-64 CPU) and [`Avx8`] (one 256-bit register, compiled for AVX2,
+//! or for AVX-512 where the CPU has it: the same kernels, with the box test's compare written straight
+//! into a mask register). The single-ray kernel
 //! puts a node's children in the lanes (one ray against `W` boxes); the packet kernel puts eight rays in
 //! them (eight rays against one box). Both call [`slab`], the same operations in the same order on every
 //! lane type (`max(near, x)` and `min(far, x)` with the running value first, as `maxps`/`minps` order
 //! their operands, and an ordered `<=` for the mask), so every path enters exactly the same boxes and the
 //! images do not depend on the CPU.
 //!
-//! AVX2 code is reached only through [`Isa::run8`], and an [`Isa`] that selects AVX2 is made only by
-//! [`Isa::new`] after the CPU was asked: the [`Avx8`] lane type is private to this file, and the
-//! [`Avx2`] token that the AVX2 variant carries has a private field. No other code can run AVX2
-//! instructions on a CPU without them.
+//! AVX2 and AVX-512 code is reached only through [`Isa::run8`], and an [`Isa`] that selects either is
+//! made only by [`Isa::new`] after the CPU was asked: the [`Avx8`] lane type is private to this file,
+//! and the [`Detected`] token that those variants carry has a private field. No other code can run
+//! these instructions on a CPU without them.
 
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -84,24 +86,28 @@ macro_rules! wide_lanes {
 wide_lanes!(f32x4, 4);
 wide_lanes!(f32x8, 8);
 
-/// Eight lanes in one AVX2 register. Values of this type exist only inside [`run_avx2`], which runs
-/// only on CPUs with AVX2 and FMA (an [`Avx2`] token is proof of that); that function is compiled for
-/// AVX2, so these intrinsics inline into the kernels it runs.
+/// Eight lanes in one 256-bit register. Values of this type exist only inside [`run_avx2`] (`MASK`
+/// false) and [`run_avx512`] (`MASK` true), which run only on CPUs with those instructions (a
+/// [`Detected`] token is proof of that); those functions are compiled for them, so these intrinsics
+/// inline into the kernels they run. With `MASK`, the ordered `<=` of the slab test is one AVX-512VL
+/// compare into a mask register instead of a compare and a `movmskps`: the same bits.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
-struct Avx8(__m256);
+struct Avx8<const MASK: bool>(__m256);
 
-/// `unsafe` blocks of [`Avx8`]'s methods: each is an AVX intrinsic, reached only from [`run_avx2`].
+/// `unsafe` blocks of [`Avx8`]'s methods: each is an AVX intrinsic (AVX-512VL for the masked compare),
+/// reached only from [`run_avx2`] or [`run_avx512`].
 #[cfg(target_arch = "x86_64")]
 macro_rules! avx {
     ($e:expr) => {
-        // SAFETY: `Avx8` is used only by code that `run_avx2` runs, on CPUs with AVX2 (see the type).
+        // SAFETY: `Avx8` is used only by code that `run_avx2` or `run_avx512` runs, on CPUs with AVX2
+        // (and AVX-512 F and VL for `Avx8<true>`, the only user of the AVX-512 intrinsic; see the type).
         unsafe { $e }
     };
 }
 
 #[cfg(target_arch = "x86_64")]
-impl Lanes<8> for Avx8 {
+impl<const MASK: bool> Lanes<8> for Avx8<MASK> {
     #[inline(always)]
     fn splat(v: f32) -> Self {
         Avx8(avx!(_mm256_set1_ps(v)))
@@ -136,7 +142,11 @@ impl Lanes<8> for Avx8 {
     }
     #[inline(always)]
     fn le(self, o: Self) -> u32 {
-        avx!(_mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0))) as u32
+        if MASK {
+            u32::from(avx!(_mm256_cmp_ps_mask::<_CMP_LE_OQ>(self.0, o.0)))
+        } else {
+            avx!(_mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0))) as u32
+        }
     }
 }
 
@@ -148,6 +158,9 @@ pub enum Simd {
     Portable,
     /// 256-bit AVX2 (with FMA) for eight lanes: detected at run time.
     Avx2,
+    /// The AVX2 kernels compiled for AVX-512 (F and VL): mask registers for the box tests' results;
+    /// detected at run time.
+    Avx512,
 }
 
 impl Simd {
@@ -162,11 +175,12 @@ impl Simd {
     }
 }
 
-/// Proof that the running CPU has AVX2 and FMA: made only by [`Isa::new`], after asking the CPU.
+/// Proof that the running CPU has the instructions of the [`Isa`] variant that carries it: made only
+/// by [`Isa::new`], after asking the CPU.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) struct Avx2 {
-    _detected: (),
+pub(super) struct Detected {
+    _private: (),
 }
 
 /// A checked instruction set: what the kernels dispatch on, once per ray or packet.
@@ -174,26 +188,37 @@ pub(super) struct Avx2 {
 pub(super) enum Isa {
     /// `wide`'s lanes: any CPU.
     Portable,
-    /// AVX2, with the proof that the CPU has it.
+    /// AVX2 and FMA, with the proof that the CPU has them.
     #[cfg(target_arch = "x86_64")]
-    Avx2(Avx2),
+    Avx2(Detected),
+    /// AVX-512 F and VL besides AVX2 and FMA, with the proof.
+    #[cfg(target_arch = "x86_64")]
+    Avx512(Detected),
 }
 
 impl Isa {
     /// The best the running CPU has.
     pub fn detect() -> Isa {
-        Isa::new(Simd::Avx2).unwrap_or(Isa::Portable)
+        Isa::new(Simd::Avx512)
+            .or_else(|| Isa::new(Simd::Avx2))
+            .unwrap_or(Isa::Portable)
     }
 
     /// `simd` if the running CPU has it.
     pub fn new(simd: Simd) -> Option<Isa> {
+        #[cfg(target_arch = "x86_64")]
+        let avx2 = || is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma");
         match simd {
             Simd::Portable => Some(Isa::Portable),
             #[cfg(target_arch = "x86_64")]
-            Simd::Avx2 => (is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"))
-                .then_some(Isa::Avx2(Avx2 { _detected: () })),
+            Simd::Avx2 => avx2().then_some(Isa::Avx2(Detected { _private: () })),
+            #[cfg(target_arch = "x86_64")]
+            Simd::Avx512 => {
+                (avx2() && is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl"))
+                    .then_some(Isa::Avx512(Detected { _private: () }))
+            }
             #[cfg(not(target_arch = "x86_64"))]
-            Simd::Avx2 => None,
+            Simd::Avx2 | Simd::Avx512 => None,
         }
     }
 
@@ -203,6 +228,8 @@ impl Isa {
             Isa::Portable => Simd::Portable,
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2(_) => Simd::Avx2,
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512(_) => Simd::Avx512,
         }
     }
 
@@ -211,9 +238,12 @@ impl Isa {
     #[inline(always)]
     pub fn run8<K: OnLanes8>(self, k: K) -> K::Output {
         match self {
-            // SAFETY: an `Avx2` token exists only if the CPU has AVX2 and FMA (`Isa::new`).
+            // SAFETY: a `Detected` token exists only if the CPU has the variant's instructions
+            // (`Isa::new`).
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2(_) => unsafe { run_avx2(k) },
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512(_) => unsafe { run_avx512(k) },
             Isa::Portable => k.run::<f32x8>(),
         }
     }
@@ -230,7 +260,15 @@ pub(super) trait OnLanes8 {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 fn run_avx2<K: OnLanes8>(k: K) -> K::Output {
-    k.run::<Avx8>()
+    k.run::<Avx8<false>>()
+}
+
+/// `k` compiled for AVX-512 F and VL (as a `target-cpu=native` build would compile it on such a CPU:
+/// EVEX encodings, 32 vector registers, mask registers), on the same 256-bit lanes.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+fn run_avx512<K: OnLanes8>(k: K) -> K::Output {
+    k.run::<Avx8<true>>()
 }
 
 /// Rays prepared for slab tests (Kay and Kajiya 1986): per axis their origins and (Embree's
