@@ -105,7 +105,11 @@ fn run(name: &str) -> Result<(), String> {
     if name == "shade" || name == "frame" {
         let scene = load("scenes/dragon.p3f")?;
         // `shade` keeps the BVH4 it was first recorded with; `frame` is what `whitted render` runs.
-        let kind = if name == "shade" { AccelKind::Bvh4 } else { AccelKind::best() };
+        let kind = if name == "shade" {
+            AccelKind::Bvh4
+        } else {
+            AccelKind::best()
+        };
         let accel = Accel::build(Prims::new(&scene), kind);
         let mut options = Options::new(&scene);
         (options.width, options.height) = (WIDTH, HEIGHT);
@@ -115,7 +119,10 @@ fn run(name: &str) -> Result<(), String> {
         if name == "frame" {
             // The counts by kind that profiles/frame.sh divides each phase by.
             let secondary = rays.reflected + rays.refracted;
-            println!("kinds primary {} shadow {} secondary {secondary}", rays.primary, rays.shadow);
+            println!(
+                "kinds primary {} shadow {} secondary {secondary}",
+                rays.primary, rays.shadow
+            );
         }
         return Ok(());
     }

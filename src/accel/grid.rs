@@ -485,7 +485,7 @@ mod tests {
         let mut s = Scene::new(camera());
         let m = s.add_material(Material::default());
         let size = |rng: &mut TestRng, i: usize| {
-            if i % 23 == 0 {
+            if i.is_multiple_of(23) {
                 rng.range(5.0, 20.0)
             } else {
                 rng.range(0.05, 1.5)

@@ -267,7 +267,7 @@ fn render_passes(
             return Ok((joined(earlier, acc), false));
         }
         acc = joined(earlier.take(), acc);
-        if acc.passes() % plan.every == 0 && pass < passes.end {
+        if acc.passes().is_multiple_of(plan.every) && pass < passes.end {
             write(plan, &acc)?;
         }
     }

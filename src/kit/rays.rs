@@ -109,10 +109,10 @@ pub fn cases(scene: &Scene, finder: &Accel, n: usize, seed: u64) -> Vec<Case> {
         let case = match i % KINDS {
             0 => {
                 let mut dir = rng.direction();
-                if j % 3 == 0 {
+                if j.is_multiple_of(3) {
                     dir[j % 7 % 3] = 0.0;
                 }
-                if j % 5 == 0 {
+                if j.is_multiple_of(5) {
                     dir = axes[j % 6];
                 }
                 Case::ray(Ray::new(origin, dir), 0.0)
@@ -128,7 +128,7 @@ pub fn cases(scene: &Scene, finder: &Accel, n: usize, seed: u64) -> Vec<Case> {
                 let probe = Ray::new(origin, rng.direction());
                 let mut hit = Hit::miss(f32::INFINITY);
                 if finder.intersect(&probe, 0.0, &mut hit) {
-                    let t_min = if j % 2 == 0 { 0.0 } else { 1e-5 * diag };
+                    let t_min = if j.is_multiple_of(2) { 0.0 } else { 1e-5 * diag };
                     let t_max = if j % 4 < 2 {
                         f32::INFINITY
                     } else {

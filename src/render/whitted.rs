@@ -235,14 +235,14 @@ impl<'a> Whitted<'a> {
     pub fn bounces(&self, ray: &Ray, surface: &Surface, depth: u32, sample: &mut PixelSample) -> Bounces {
         let mut out = self.split(ray, surface, depth, &mut sample.rng);
         let spent = sample.rays.reflected + sample.rays.refracted;
-        if let (Some((_, t)), Some((_, r))) = (out.refracted, out.reflected) {
-            if spent >= SPLIT_BUDGET {
-                // On a tie the mirror ray goes on: it is the one a total internal reflection keeps.
-                if t > r {
-                    out.reflected = None;
-                } else {
-                    out.refracted = None;
-                }
+        if let (Some((_, t)), Some((_, r))) = (out.refracted, out.reflected)
+            && spent >= SPLIT_BUDGET
+        {
+            // On a tie the mirror ray goes on: it is the one a total internal reflection keeps.
+            if t > r {
+                out.reflected = None;
+            } else {
+                out.refracted = None;
             }
         }
         out

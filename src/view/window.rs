@@ -360,10 +360,10 @@ fn key_of(code: KeyCode) -> Option<Key> {
 
 impl ApplicationHandler<Frame> for App<'_> {
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {
-        if self.window.is_none() {
-            if let Err(e) = self.open(event_loop) {
-                self.fail(event_loop, e);
-            }
+        if self.window.is_none()
+            && let Err(e) = self.open(event_loop)
+        {
+            self.fail(event_loop, e);
         }
     }
 
