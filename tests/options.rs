@@ -759,6 +759,37 @@ fn bench_json_reflects_spp_height_threads_and_accel() {
     }
 }
 
+/// A sample count that is not a square is rounded up to one, with a warning, in `bench` as in
+/// `render`: 3 samples trace 2 x 2 camera rays a pixel.
+#[test]
+fn bench_and_render_round_spp_up_to_a_square_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("spp3.png");
+    let warning = "whitted: warning: 3 samples per pixel is not a square: taking 2 x 2 = 4\n";
+    for args in [
+        &["bench", DEFAULT, "--frames", "1", "--json"][..],
+        &[
+            "render",
+            DEFAULT,
+            "-q",
+            "--stats=json",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+    ] {
+        let run = ok(&[args, &["--spp", "3", "--height", "12"]].concat());
+        let err = String::from_utf8(run.stderr).unwrap();
+        assert_eq!(err, warning, "{}", args[0]);
+        let v: Value = serde_json::from_slice(&run.stdout).unwrap();
+        let rays = if args[0] == "bench" {
+            "rays_per_frame"
+        } else {
+            "rays"
+        };
+        assert_eq!(int(&v[rays]["primary"]), 16 * 12 * 4, "{}: {v}", args[0]);
+    }
+}
+
 /// `bench`'s text: the frames line, the frame line, the report's header with the frame's settings, and
 /// the table of rays whose total is the sum of the kinds.
 #[test]
