@@ -63,9 +63,11 @@ fn usage_error(args: &[&str], first_line: &str) -> String {
     err
 }
 
-/// [`usage_error`] of `whitted render ARGS`.
+/// [`usage_error`] of `whitted render ARGS`, whose output is in a directory that does not exist: a
+/// render that took the arguments writes nothing (and fails at the output, if not before).
 fn render_usage(args: &[&str], first_line: &str) -> String {
-    usage_error(&[&["render"][..], args].concat(), first_line)
+    let never = ["-o", "/nonexistent/whitted-usage-error.png"];
+    usage_error(&[&["render"][..], args, &never].concat(), first_line)
 }
 
 /// Renders `args` quietly to `dir/name` and returns the file's path.
