@@ -101,6 +101,7 @@ pub fn run(args: &BenchArgs) -> whitted::Result<()> {
     };
     let start = Instant::now();
     let mut scene = load_scene(Some(&path))?;
+    warn(&scene.warnings);
     args.camera.apply(&mut scene.camera)?;
     let loaded = start.elapsed();
     let options = options(args, &scene)?;
@@ -109,6 +110,8 @@ pub fn run(args: &BenchArgs) -> whitted::Result<()> {
     let accel = pool.install(|| Accel::build(Prims::new(&scene), args.frame.accel));
     let built = start.elapsed();
     let renderer = Renderer::new(&scene, &accel, options);
+    // As render says them: a sample count rounded up to a square, a skybox not found.
+    warn(&renderer.warnings);
     let never = AtomicBool::new(false);
     // Every frame is pass 1: the same rays, so the frames time the same work.
     let frame = || pool.install(|| renderer.render_pass(1, &|| {}, &never).expect("never stopped"));
@@ -136,6 +139,13 @@ pub fn run(args: &BenchArgs) -> whitted::Result<()> {
         print!("{}", report.text());
     }
     Ok(())
+}
+
+/// Prints `warnings` on stderr, one a line.
+fn warn(warnings: &[String]) {
+    for w in warnings {
+        eprintln!("whitted: warning: {w}");
+    }
 }
 
 /// The median, least and most of the frame times `ms` (at least one).

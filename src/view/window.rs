@@ -248,6 +248,11 @@ impl App<'_> {
     /// A frame came from the render thread: show it, learn from its time, and with `--frames` stop
     /// after the last.
     fn frame_done(&mut self, event_loop: &ActiveEventLoop, frame: Frame) -> Result<()> {
+        // After the last of `--frames` the loop is exiting, but the frames already queued still come
+        // (winit hands over every pending user event first): they must not replace the screenshot.
+        if self.config.frames.is_some_and(|n| self.frames >= n) {
+            return Ok(());
+        }
         self.state.frame_rendered(&frame.job, frame.seconds);
         self.frame = Some(frame);
         self.frames += 1;
