@@ -174,8 +174,12 @@ fn max_depth_bounds_the_bounces_and_refuses_more_than_64() {
 
     let out = d.join("deep.png");
     let args = small(DEFAULT, &["--max-depth", "65", "-q", "-o", out.to_str().unwrap()]);
-    let err = fails(&[&["render"][..], &args].concat(), 1);
-    assert_eq!(err, "whitted: a depth of 65 bounces is more than the most, 64\n");
+    // Out of range is a usage error (status 2), refused by the argument parser with clap's words.
+    let err = fails(&[&["render"][..], &args].concat(), 2);
+    assert!(
+        err.contains("invalid value '65' for '--max-depth") && err.contains("65 is not in 0..=64"),
+        "{err}"
+    );
     assert!(!out.exists());
 }
 
@@ -789,6 +793,7 @@ fn bench_and_render_round_spp_up_to_a_square_with_a_warning() {
             "rays"
         };
         assert_eq!(int(&v[rays]["primary"]), 16 * 12 * 4, "{}: {v}", args[0]);
+        assert_eq!(int(&v["spp"]), 4, "the samples taken, {}: {v}", args[0]);
     }
 }
 

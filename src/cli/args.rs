@@ -249,6 +249,13 @@ pub fn pass_range(s: &str) -> Result<(u32, u32), String> {
     Ok((a, b))
 }
 
+/// Prints `warnings` on stderr, one a line.
+pub fn warn(warnings: &[String]) {
+    for w in warnings {
+        eprintln!("whitted: warning: {w}");
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use clap::Parser;

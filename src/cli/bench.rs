@@ -13,7 +13,7 @@ use whitted::render::{Options, Renderer};
 use whitted::scene::Scene;
 
 use super::args::{
-    CameraArgs, DEFAULT_DEPTH, FrameArgs, load_scene, resolution, spd_frame, spd_refuses, thread_pool,
+    CameraArgs, DEFAULT_DEPTH, FrameArgs, load_scene, resolution, spd_frame, spd_refuses, thread_pool, warn,
 };
 use super::report::Report;
 
@@ -31,8 +31,8 @@ pub struct BenchArgs {
     /// Samples per pixel (default: the file's).
     #[arg(long)]
     spp: Option<u32>,
-    /// Most bounces after the primary hit (default 6).
-    #[arg(long)]
+    /// Most bounces after the primary hit (default 6, at most 64).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=whitted::render::MAX_DEPTH as i64))]
     max_depth: Option<u32>,
     /// Time frames of the SPD test procedure (513x513 corner rays, spp 0, 4 bounces) and compare their
     /// counts with the SPD Readme's (refuses --spp, --width, --height and --max-depth).
@@ -139,13 +139,6 @@ pub fn run(args: &BenchArgs) -> whitted::Result<()> {
         print!("{}", report.text());
     }
     Ok(())
-}
-
-/// Prints `warnings` on stderr, one a line.
-fn warn(warnings: &[String]) {
-    for w in warnings {
-        eprintln!("whitted: warning: {w}");
-    }
 }
 
 /// The median, least and most of the frame times `ms` (at least one).

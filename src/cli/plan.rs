@@ -264,10 +264,6 @@ mod tests {
             "4294967295 samples per pixel is more than the most, 65536 (256 x 256); for more, average \
              progressive passes (--passes)"
         );
-        assert_eq!(
-            error("--max-depth 3000"),
-            "a depth of 3000 bounces is more than the most, 64"
-        );
     }
 
     /// `--threads` is bounded where it is parsed: a count rayon could not start (100000 threads panic
@@ -284,6 +280,19 @@ mod tests {
         }
         assert_eq!(plan("--threads 3").threads, Some(3));
         assert_eq!(plan("--threads 1024").threads, Some(1024));
+    }
+
+    /// `--max-depth` too: past 64 bounces is a usage error (the library refuses it as well,
+    /// `Options::validate`).
+    #[test]
+    fn max_depth_is_parsed_within_0_to_64() {
+        for value in ["65", "3000"] {
+            let parsed = Render::try_parse_from(["render", "--max-depth", value]);
+            let e = parsed.err().expect("refused").to_string();
+            assert!(e.contains(&format!("{value} is not in 0..=64")), "{e}");
+        }
+        assert_eq!(plan("--max-depth 64").options.max_depth, 64);
+        assert_eq!(plan("--max-depth 0").options.max_depth, 0);
     }
 
     #[test]

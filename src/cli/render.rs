@@ -15,7 +15,7 @@ use whitted::scene::Scene;
 use super::Ended;
 use super::args::{
     BuildKind, CameraArgs, FrameArgs, image, load_scene, non_negative, part_of, pass_range, positive,
-    thread_pool,
+    thread_pool, warn,
 };
 use super::outputs;
 use super::plan::{Plan, Target, writes_partial};
@@ -47,8 +47,8 @@ pub struct RenderArgs {
     pub resume: bool,
     #[command(flatten)]
     pub frame: FrameArgs,
-    /// Most bounces after the primary hit (default 6).
-    #[arg(long)]
+    /// Most bounces after the primary hit (default 6, at most 64).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=whitted::render::MAX_DEPTH as i64))]
     pub max_depth: Option<u32>,
     /// The BVH2 builder when `--accel bvh2`: sah or midpoint.
     #[arg(long, default_value = "sah")]
@@ -161,13 +161,6 @@ fn check_outputs(args: &RenderArgs) -> whitted::Result<()> {
     match &args.progressive_out {
         Some(dir) if !partial && args.passes > 1 => outputs::check_snapshots(dir, &args.output),
         _ => Ok(()),
-    }
-}
-
-/// Prints `warnings` on stderr, one a line.
-fn warn(warnings: &[String]) {
-    for w in warnings {
-        eprintln!("whitted: warning: {w}");
     }
 }
 

@@ -149,7 +149,9 @@ impl Report {
         let (accel, simd, threads) = (self.accel, self.simd, self.threads);
         let mut out = format!(
             "whitted {VERSION}: {}, {w}x{h}, spp {}, depth {}, {accel} ({simd}), {kernel} kernel, {threads} threads\n",
-            self.scene, self.options.spp, self.options.max_depth
+            self.scene,
+            self.options.spp_taken(),
+            self.options.max_depth
         );
         let [load, build, render] = self.times;
         let (what, passes) = match (self.per_frame, self.passes) {
@@ -188,7 +190,7 @@ impl Report {
             "scene": self.scene,
             "width": w,
             "height": h,
-            "spp": self.options.spp,
+            "spp": self.options.spp_taken(),
             "max_depth": self.options.max_depth,
             "accel": self.accel,
             "simd": self.simd,

@@ -66,12 +66,12 @@ impl<'a> Renderer<'a> {
         background: Background,
     ) -> Self {
         let mut warnings = Vec::new();
-        let side = (options.spp as f64).sqrt().ceil() as u32;
-        if side * side != options.spp {
+        let side = options.side();
+        if options.spp_taken() != options.spp {
             warnings.push(format!(
                 "{} samples per pixel is not a square: taking {side} x {side} = {}",
                 options.spp,
-                side * side
+                options.spp_taken()
             ));
         }
         if side == 0 && camera.aperture > 0.0 {

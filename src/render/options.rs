@@ -66,6 +66,17 @@ pub struct Options {
 }
 
 impl Options {
+    /// The samples per pixel a side of the jittered grid: `spp` rounded up to a square's side (0 for
+    /// one ray through the centre).
+    pub fn side(&self) -> u32 {
+        (self.spp as f64).sqrt().ceil() as u32
+    }
+
+    /// The samples per pixel actually taken: [`Options::side`] squared (`spp` when it is a square).
+    pub fn spp_taken(&self) -> u32 {
+        self.side() * self.side()
+    }
+
     /// The scene's own resolution and samples per pixel, 6 bounces, seed 0, mirrors sharp.
     pub fn new(scene: &Scene) -> Self {
         Options {
