@@ -54,6 +54,7 @@ pub mod error;
 pub mod geometry;
 #[cfg(feature = "kit")]
 pub mod kit;
+pub mod machine;
 pub mod parts;
 pub mod render;
 pub mod scene;

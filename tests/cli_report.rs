@@ -258,7 +258,7 @@ fn info_spd_prints_the_procedures_frame_and_the_readmes_row() {
 }
 
 /// The keys of `bench --json`: the frames' times, then the report's.
-const BENCH_KEYS: [&str; 23] = [
+const BENCH_KEYS: [&str; 24] = [
     "frames",
     "frame_ms",
     "frame_ms_median",
@@ -266,6 +266,7 @@ const BENCH_KEYS: [&str; 23] = [
     "frame_ms_max",
     "fps_median",
     "version",
+    "cpu",
     "scene",
     "width",
     "height",
@@ -353,6 +354,7 @@ fn bench_json_has_every_documented_key_with_the_runs_values() {
     assert!(close(float(&v["fps_median"]), 1e3 / median, 1e-12));
     assert!(close(float(&v["render_s"]), median / 1e3, 1e-9));
     assert_eq!(v["version"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(v["cpu"].as_str(), Some(common::cpu_line().as_str()));
     assert_eq!(v["scene"], "scenes/spd/tetra_default.nff");
     let frame = [
         ("width", 32),
@@ -481,6 +483,7 @@ fn render_spd_stats_counts_tetra_within_ten_percent_of_the_readme() {
     let v = spd_render("tetra_default.nff");
     let report = [
         "version",
+        "cpu",
         "scene",
         "width",
         "height",

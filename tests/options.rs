@@ -839,10 +839,11 @@ fn bench_text_prints_the_frames_and_the_report() {
             env!("CARGO_PKG_VERSION")
         )
     );
-    assert!(lines[3].starts_with("time       load "), "{}", lines[3]);
-    assert!(lines[3].contains(", frame (median) "), "{}", lines[3]);
+    assert_eq!(lines[3], format!("cpu        {}", common::cpu_line()), "{text}");
+    assert!(lines[4].starts_with("time       load "), "{}", lines[4]);
+    assert!(lines[4].contains(", frame (median) "), "{}", lines[4]);
     assert_eq!(
-        lines[4].split_whitespace().collect::<Vec<_>>(),
+        lines[5].split_whitespace().collect::<Vec<_>>(),
         ["rays", "a", "frame", "count", "Mrays/s"]
     );
     let count = |kind: &str| -> u64 {

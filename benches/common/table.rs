@@ -31,7 +31,8 @@ pub fn median(group: &str, id: &str, since: SystemTime) -> Option<f64> {
 
 /// Prints a Markdown table: `header`, then each row's label and cells (`-` where a bench did not run).
 pub fn print(title: &str, header: &[&str], rows: &[(String, Vec<Option<String>>)]) {
-    println!("\n{title}\n");
+    // Figures mean little without the CPU they were measured on.
+    println!("\n{title}, on {}\n", whitted::machine::cpu());
     println!("| {} |", header.join(" | "));
     println!("|{}", "---|".repeat(header.len()));
     for (label, cells) in rows {

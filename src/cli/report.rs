@@ -153,6 +153,7 @@ impl Report {
             self.options.spp_taken(),
             self.options.max_depth
         );
+        out += &format!("cpu        {}\n", whitted::machine::cpu());
         let [load, build, render] = self.times;
         let (what, passes) = match (self.per_frame, self.passes) {
             (true, _) => ("frame (median)", String::new()),
@@ -187,6 +188,7 @@ impl Report {
         let [load, build, render] = self.times;
         let mut out = match json!({
             "version": VERSION,
+            "cpu": whitted::machine::cpu(),
             "scene": self.scene,
             "width": w,
             "height": h,

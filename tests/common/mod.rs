@@ -75,3 +75,25 @@ pub fn best_simd() -> &'static str {
     }
     "portable"
 }
+
+/// The CPU line the reports should print, read here from `/proc/cpuinfo` rather than asked of the
+/// crate: the first processor's `model name (family F, model M)` and the logical CPUs this process
+/// may use.
+pub fn cpu_line() -> String {
+    let logical = std::thread::available_parallelism().unwrap().get();
+    let text = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    let first = text.split("\n\n").next().unwrap_or_default();
+    let field = |key: &str| {
+        first
+            .lines()
+            .filter_map(|l| l.split_once(':'))
+            .find(|(k, _)| k.trim() == key)
+            .map(|(_, v)| v.trim().to_string())
+    };
+    let name = match (field("model name"), field("cpu family"), field("model")) {
+        (Some(n), Some(f), Some(m)) => format!("{n} (family {f}, model {m})"),
+        (Some(n), _, _) => n,
+        _ => format!("unknown {} CPU", std::env::consts::ARCH),
+    };
+    format!("{name}, {logical} logical CPUs")
+}
