@@ -4,7 +4,8 @@
 //! and obvhs 0.4's CWBVH and BVH2 with its `fast`, `medium` and `very_slow` presets on all threads; then
 //! a table of the median times beside each tree's SAH cost (traversal and intersection cost 1, areas
 //! relative to the root: binary trees compare with binary trees, wide with wide). With
-//! `--features bench-embree`, Embree 3's builds (medium and high quality) join them.
+//! `--features bench-embree`, Embree 3's builds (medium and high quality, the library's binding:
+//! `whitted::accel::embree`) join them.
 //!
 //! `cargo bench --bench build`; `WHITTED_BENCH_QUICK=1` for a smoke run; `WHITTED_BENCH_SCENE` for one
 //! other scene.
@@ -110,10 +111,10 @@ fn build(c: &mut Criterion) {
         }
         #[cfg(feature = "bench-embree")]
         for (threads, _) in &pools {
-            use common::embree::EmbreeScene;
-            for (q, high) in [("medium", false), ("high", true)] {
-                g.bench_function(format!("embree-{q}/{threads}-threads"), |b| {
-                    b.iter(|| EmbreeScene::new(&scene, *threads, high))
+            use whitted::accel::embree::{Embree, Quality};
+            for quality in [Quality::Medium, Quality::High] {
+                g.bench_function(format!("embree-{}/{threads}-threads", quality.name()), |b| {
+                    b.iter(|| Embree::new(prims, quality, *threads).expect("Embree builds"))
                 });
             }
         }

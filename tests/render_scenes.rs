@@ -34,7 +34,11 @@ fn check(path: &Path) {
     let start = Instant::now();
     let scene = scene::load(path).unwrap_or_else(|e| panic!("{e}"));
     let prims = Prims::new(&scene);
-    let list: Vec<Contestant> = contestants::all(prims);
+    // Embree (with the `embree` feature) renders within a tolerance of these: tests/embree.rs.
+    let list: Vec<Contestant> = contestants::all(prims)
+        .into_iter()
+        .filter(|c| c.same_images())
+        .collect();
     let built = start.elapsed();
     // The reference: the first wide BVH's single rays (the fastest to render), itself rendered twice
     // (here and in the loop), and compared with brute force below.
@@ -188,7 +192,10 @@ fn packets_match_single_rays_with_many_light_samples_and_deep_bounces() {
         Vec3::new(0.0, 0.0, -5.0),
         matte,
     );
-    for c in contestants::all(Prims::new(&s)) {
+    for c in contestants::all(Prims::new(&s))
+        .into_iter()
+        .filter(|c| c.same_images())
+    {
         for size in [64, 61] {
             assert!(
                 render(&s, &c.accel, size, Kernel::Packet) == render(&s, &c.accel, size, Kernel::Single),

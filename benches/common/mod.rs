@@ -1,8 +1,6 @@
 //! What the benches share: the scene they load, how long criterion measures, the peer they are measured
 //! against and the table they print.
 
-#[cfg(feature = "bench-embree")]
-pub mod embree;
 pub mod obvhs;
 pub mod table;
 

@@ -62,10 +62,11 @@ impl<'a> Ours<'a> {
     }
 
     /// Every structure of the kit with its single-ray kernel, and the wide BVHs with their packets too
-    /// (the others answer packets ray by ray: their packet rows would time single rays again).
+    /// (the others answer packets ray by ray: their packet rows would time single rays again). Embree,
+    /// which the kit lists with the `embree` feature, is a peer's: its rows are `embree.rs`'s.
     pub fn all(built: &'a [Built<'a>]) -> Vec<Ours<'a>> {
         let mut out = Vec::new();
-        for b in built {
+        for b in built.iter().filter(|b| !b.is_embree()) {
             let id = b.name.replace(' ', "-");
             if b.has_packet_kernel() {
                 out.push(Ours::new(&format!("{id}-packets"), &b.accel, true));

@@ -4,7 +4,7 @@
 //! kernel, the wide BVHs with their packet kernel too (8 consecutive rays a packet), and obvhs 0.4's
 //! CWBVH and BVH2 (`very_slow_build`, its best trees, traced with our triangle test); with
 //! `--features bench-embree`, Embree 3's single rays and 8-wide packets on its high-quality (spatial
-//! split) BVH; with `--features bench-tinybvh`, tinybvh's BVH8_CPU (needs
+//! split) BVH, through the library's binding (`whitted::accel::embree`); with `--features bench-tinybvh`, tinybvh's BVH8_CPU (needs
 //! `RUSTFLAGS="-C target-cpu=native"`, `tinybvh.rs`). The ray sets: primary rays (closest hit), shadow
 //! rays (any hit) and diffuse bounces (closest hit, incoherent).
 //!
@@ -37,6 +37,7 @@ use rayon::prelude::*;
 use whitted::accel::{Accel, AccelKind, Hit, PrimKind, Prims};
 use whitted::geometry::ray::Ray;
 use whitted::kit::contestants as kit;
+use whitted::kit::oracle::edge_margin;
 use whitted::kit::workload::{self, Workload};
 
 /// Rays of each set that brute force traces (it tests all 871k triangles per ray).
@@ -72,19 +73,6 @@ fn par<T: Sync>(items: &[T], count: impl Fn(&[T]) -> usize + Sync + Send) -> usi
 fn sample<T: Copy>(v: &[T]) -> Vec<T> {
     let step = (v.len() / BRUTE_SAMPLE).max(1);
     v.iter().step_by(step).take(BRUTE_SAMPLE).copied().collect()
-}
-
-/// Barycentric distance (exact enough: f64) of the point where `ray` crosses the plane of triangle
-/// `[a, b, c]` from the triangle's nearest edge: min(u, v, 1 − u − v), negative outside.
-fn edge_margin(ray: &Ray, [a, b, c]: [glam::Vec3; 3]) -> f64 {
-    let (o, d) = (ray.origin.as_dvec3(), ray.dir.as_dvec3());
-    let (a, e1, e2) = (a.as_dvec3(), (b - a).as_dvec3(), (c - a).as_dvec3());
-    let p = d.cross(e2);
-    let det = e1.dot(p);
-    let s = o - a;
-    let u = s.dot(p) / det;
-    let v = d.dot(s.cross(e1)) / det;
-    u.min(v).min(1.0 - u - v)
 }
 
 /// A peer with its own triangle test may round differently from ours on rays that cross within f32
@@ -231,7 +219,8 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     #[cfg(feature = "bench-embree")]
     let embree_scene = {
         let all = std::thread::available_parallelism().map_or(1, |n| n.get());
-        common::embree::EmbreeScene::new(&scene, all, true)
+        use whitted::accel::embree::{Embree, Quality};
+        Embree::new(prims, Quality::High, all).expect("Embree builds")
     };
     #[cfg(feature = "bench-embree")]
     let embree = embree::Embree::both(&embree_scene);

@@ -16,6 +16,11 @@ impl<'a> Brute<'a> {
         Brute { prims }
     }
 
+    /// The scene's primitives.
+    pub fn prims(&self) -> Prims<'a> {
+        self.prims
+    }
+
     /// The one traversal: all ids, planes included; `hit.t` is the upper limit and shrinks on each hit.
     #[inline]
     pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {

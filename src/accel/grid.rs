@@ -195,6 +195,11 @@ impl fmt::Debug for Grid<'_> {
 }
 
 impl<'a> Grid<'a> {
+    /// The scene's primitives.
+    pub fn prims(&self) -> Prims<'a> {
+        self.prims
+    }
+
     /// Builds the grid over the bounded primitives' boxes.
     pub fn build(prims: Prims<'a>) -> Self {
         let mut boxes = Vec::with_capacity(prims.bounded() as usize);

@@ -6,6 +6,8 @@
 
 pub mod brute;
 pub mod bvh2;
+#[cfg(feature = "embree")]
+pub mod embree;
 pub mod grid;
 pub mod packet;
 pub mod policy;
@@ -39,7 +41,14 @@ pub enum AccelKind {
     Bvh4,
     /// 8-wide BVH: one AVX2 slab test per node where the CPU has AVX2 (two SSE halves elsewhere).
     Bvh8,
+    /// Embree 3 (the system's `libembree3`), to race against: only with the cargo feature `embree`.
+    #[cfg(feature = "embree")]
+    Embree,
 }
+
+/// Why `embree` is not an accelerator of this build, and how to get one that has it.
+pub const NO_EMBREE: &str = "this whitted was built without Embree: `--accel embree` needs \
+     `cargo build --release --features embree` (and Embree 3: `apt-get install libembree-dev` on Debian/Ubuntu)";
 
 /// How the BVHs are built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -82,8 +91,13 @@ impl FromStr for AccelKind {
             "bvh4" => Ok(AccelKind::Bvh4),
             "bvh8" => Ok(AccelKind::Bvh8),
             "auto" => Ok(AccelKind::best()),
+            #[cfg(feature = "embree")]
+            "embree" => Ok(AccelKind::Embree),
+            #[cfg(not(feature = "embree"))]
+            "embree" => Err(NO_EMBREE.to_string()),
             _ => Err(format!(
-                "unknown accelerator \"{s}\": expected none, grid, bvh2, bvh4, bvh8 or auto"
+                "unknown accelerator \"{s}\": expected none, grid, bvh2, bvh4, bvh8, {}or auto",
+                if cfg!(feature = "embree") { "embree " } else { "" }
             )),
         }
     }
@@ -102,6 +116,9 @@ pub enum Accel<'a> {
     Bvh4(Bvh4<'a>),
     /// 8-wide BVH.
     Bvh8(Bvh8<'a>),
+    /// Embree 3's BVH over the bounded primitives, the planes beside it.
+    #[cfg(feature = "embree")]
+    Embree(embree::Embree<'a>),
 }
 
 impl<'a> Accel<'a> {
@@ -110,10 +127,31 @@ impl<'a> Accel<'a> {
         Self::build_with(prims, kind, BuildOptions::default())
     }
 
+    /// Builds the chosen structure with explicit build options, or says why Embree could not build its
+    /// scene (`--accel embree`; our own structures always build). Embree builds on as many threads as
+    /// the current rayon pool has.
+    pub fn try_build_with(prims: Prims<'a>, kind: AccelKind, options: BuildOptions) -> crate::Result<Self> {
+        match kind {
+            #[cfg(feature = "embree")]
+            AccelKind::Embree => {
+                let threads = rayon::current_num_threads();
+                embree::Embree::new(prims, embree::DEFAULT_QUALITY, threads).map(Accel::Embree)
+            }
+            _ => Ok(Self::build_with(prims, kind, options)),
+        }
+    }
+
     /// Builds the chosen structure with explicit build options. A scene too large for the wide BVHs'
     /// leaf references gets a BVH2.
+    ///
+    /// # Panics
+    ///
+    /// When Embree fails to build its scene (out of memory, say): [`Accel::try_build_with`] returns
+    /// that error instead.
     pub fn build_with(prims: Prims<'a>, kind: AccelKind, options: BuildOptions) -> Self {
         match kind {
+            #[cfg(feature = "embree")]
+            AccelKind::Embree => Self::try_build_with(prims, kind, options).unwrap_or_else(|e| panic!("{e}")),
             AccelKind::None => Accel::Brute(Brute::new(prims)),
             AccelKind::Grid => Accel::Grid(Grid::build(prims)),
             AccelKind::Bvh2 => Accel::Bvh2(Bvh2::new(prims, options.builder)),
@@ -137,6 +175,31 @@ impl<'a> Accel<'a> {
             Accel::Bvh2(b) => format!("bvh2: {}", b.stats()),
             Accel::Bvh4(b) => format!("bvh4: {}", b.stats()),
             Accel::Bvh8(b) => format!("bvh8 ({:?} slab tests): {}", b.simd(), b.stats()),
+            #[cfg(feature = "embree")]
+            Accel::Embree(e) => e.describe(),
+        }
+    }
+
+    /// The scene's primitives the structure was built over.
+    pub fn prims(&self) -> Prims<'a> {
+        match self {
+            Accel::Brute(b) => b.prims(),
+            Accel::Grid(g) => g.prims(),
+            Accel::Bvh2(b) => *b.prims(),
+            Accel::Bvh4(b) => b.prims(),
+            Accel::Bvh8(b) => b.prims(),
+            #[cfg(feature = "embree")]
+            Accel::Embree(e) => e.prims(),
+        }
+    }
+
+    /// True for the structures that trace a packet's rays together: the wide BVHs and Embree (the
+    /// others answer a packet ray by ray).
+    pub fn has_packet_kernel(&self) -> bool {
+        match self {
+            #[cfg(feature = "embree")]
+            Accel::Embree(_) => true,
+            _ => self.simd().is_some(),
         }
     }
 
@@ -168,6 +231,8 @@ impl<'a> Accel<'a> {
             Accel::Bvh2(b) => b.traverse::<Closest>(ray, t_min, hit),
             Accel::Bvh4(b) => b.traverse::<Closest>(ray, t_min, hit),
             Accel::Bvh8(b) => b.traverse::<Closest>(ray, t_min, hit),
+            #[cfg(feature = "embree")]
+            Accel::Embree(e) => e.intersect(ray, t_min, hit),
         }
     }
 
@@ -176,6 +241,8 @@ impl<'a> Accel<'a> {
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         let mut hit = Hit::miss(t_max);
         match self {
+            #[cfg(feature = "embree")]
+            Accel::Embree(e) => e.occluded(ray, t_min, t_max),
             Accel::Brute(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
             Accel::Grid(g) => g.traverse::<AnyHit>(ray, t_min, &mut hit),
             Accel::Bvh2(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
@@ -194,6 +261,8 @@ impl<'a> Accel<'a> {
         match self {
             Accel::Bvh4(b) => b.traverse_packet::<Closest>(rays, active, t_min, hits),
             Accel::Bvh8(b) => b.traverse_packet::<Closest>(rays, active, t_min, hits),
+            #[cfg(feature = "embree")]
+            Accel::Embree(e) => e.intersect_packet(rays, active, t_min, hits),
             _ => packet::ray_by_ray(active, |k| self.intersect(&rays[k], t_min, &mut hits[k])),
         }
     }
@@ -206,6 +275,8 @@ impl<'a> Accel<'a> {
         match self {
             Accel::Bvh4(b) => b.traverse_packet::<AnyHit>(rays, active, t_min, &mut hits),
             Accel::Bvh8(b) => b.traverse_packet::<AnyHit>(rays, active, t_min, &mut hits),
+            #[cfg(feature = "embree")]
+            Accel::Embree(e) => e.occluded_packet(rays, active, t_min, t_max),
             _ => packet::ray_by_ray(active, |k| self.occluded(&rays[k], t_min, t_max[k])),
         }
     }

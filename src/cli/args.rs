@@ -27,8 +27,8 @@ pub struct FrameArgs {
     /// Worker threads, 1 to 1024 (default: all cores).
     #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=1024))]
     pub threads: Option<usize>,
-    /// Acceleration structure: none, grid, bvh2, bvh4, bvh8 (8-wide nodes, AVX2 where the CPU has it)
-    /// or auto (bvh8 on CPUs with AVX2, else bvh4).
+    /// Acceleration structure: none, grid, bvh2, bvh4, bvh8 (8-wide nodes, AVX2 where the CPU has it),
+    /// auto (bvh8 on CPUs with AVX2, else bvh4) or embree (Embree 3; builds with `--features embree`).
     #[arg(long, default_value = "auto")]
     pub accel: AccelKind,
     /// Camera rays one at a time (single) or in packets of 8 (packet, BVH4 and BVH8; same image).

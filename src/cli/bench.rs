@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 
 use clap::Args;
 use serde_json::Value;
-use whitted::accel::{Accel, Prims};
+use whitted::accel::{Accel, AccelKind, Prims};
 use whitted::render::{Options, Renderer};
 use whitted::scene::Scene;
 
@@ -40,6 +40,10 @@ pub struct BenchArgs {
     spd: bool,
     #[command(flatten)]
     camera: CameraArgs,
+    /// Also time the same frames with this accelerator (`embree`, with the `embree` feature, or any of
+    /// --accel's), alternating frame by frame with --accel's, and print both and their speed ratio.
+    #[arg(long, value_name = "ACCEL")]
+    compare: Option<AccelKind>,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
@@ -93,6 +97,15 @@ fn options(args: &BenchArgs, scene: &Scene) -> whitted::Result<Options> {
     Ok(options)
 }
 
+/// One accelerator's frames: the renderer and the frame times.
+struct Timed<'a> {
+    renderer: Renderer<'a>,
+    accel: &'a Accel<'a>,
+    built: Duration,
+    ms: Vec<f64>,
+    rays: whitted::render::RayCounts,
+}
+
 /// Renders the frames and prints their timing.
 pub fn run(args: &BenchArgs) -> whitted::Result<()> {
     let path = match &args.scene {
@@ -106,37 +119,82 @@ pub fn run(args: &BenchArgs) -> whitted::Result<()> {
     let loaded = start.elapsed();
     let options = options(args, &scene)?;
     let pool = thread_pool(args.frame.threads)?;
-    let start = Instant::now();
-    let accel = pool.install(|| Accel::build(Prims::new(&scene), args.frame.accel));
-    let built = start.elapsed();
-    let renderer = Renderer::new(&scene, &accel, options);
-    // As render says them: a sample count rounded up to a square, a skybox not found.
-    warn(&renderer.warnings);
+    let build = |kind: AccelKind| {
+        let start = Instant::now();
+        let accel = pool.install(|| Accel::try_build_with(Prims::new(&scene), kind, Default::default()))?;
+        Ok::<_, whitted::Error>((accel, start.elapsed()))
+    };
+    let (accel, built) = build(args.frame.accel)?;
+    let other = args.compare.map(build).transpose()?;
     let never = AtomicBool::new(false);
     // Every frame is pass 1: the same rays, so the frames time the same work.
-    let frame = || pool.install(|| renderer.render_pass(1, &|| {}, &never).expect("never stopped"));
-    let (_, rays) = frame();
-    let ms: Vec<f64> = (0..args.frames)
-        .map(|_| {
-            let start = Instant::now();
-            frame();
-            start.elapsed().as_secs_f64() * 1e3
+    let frame = |r: &Renderer| pool.install(|| r.render_pass(1, &|| {}, &never).expect("never stopped"));
+    let mut timed: Vec<Timed> = std::iter::once((&accel, built))
+        .chain(other.as_ref().map(|(a, b)| (a, *b)))
+        .map(|(accel, built)| {
+            let renderer = Renderer::new(&scene, accel, options);
+            let (_, rays) = frame(&renderer);
+            Timed {
+                renderer,
+                accel,
+                built,
+                ms: Vec::new(),
+                rays,
+            }
         })
         .collect();
-    let (median, min, max) = spread(&ms);
-    let times = [loaded, built, Duration::from_secs_f64(median / 1e3)];
+    // As render says them: a sample count rounded up to a square, a skybox not found (once: both
+    // renderers have the same).
+    warn(&timed[0].renderer.warnings);
+    // With --compare, the two alternate frame by frame, so that a change in the machine's load falls on
+    // both.
+    for _ in 0..args.frames {
+        for t in &mut timed {
+            let start = Instant::now();
+            frame(&t.renderer);
+            t.ms.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+    }
     let threads = pool.current_num_threads();
-    let report = Report {
-        per_frame: true,
-        ..Report::new(Some(&path), &options, &accel, threads, times, rays)
-    };
+    let reports: Vec<Report> = timed
+        .iter()
+        .map(|t| {
+            let (median, _, _) = spread(&t.ms);
+            let times = [loaded, t.built, Duration::from_secs_f64(median / 1e3)];
+            Report {
+                per_frame: true,
+                ..Report::new(Some(&path), &options, t.accel, threads, times, t.rays)
+            }
+        })
+        .collect();
+    let median = |k: usize| spread(&timed[k].ms).0;
     if args.json {
-        println!("{}", json(&report, &ms));
+        let mut out = json(&reports[0], &timed[0].ms);
+        if timed.len() == 2 {
+            out["compare"] = json(&reports[1], &timed[1].ms);
+            out["speed_ratio"] = (median(1) / median(0)).into();
+        }
+        println!("{out}");
     } else {
-        let fps = 1e3 / median;
-        println!("frames     {} timed after one of warm-up", ms.len());
-        println!("frame      median {median:.1} ms (min {min:.1}, max {max:.1}), {fps:.2} fps");
-        print!("{}", report.text());
+        println!("frames     {} timed after one of warm-up", timed[0].ms.len());
+        for (t, report) in timed.iter().zip(&reports) {
+            if timed.len() == 2 {
+                println!("\n{}:", report.accel);
+            }
+            let (median, min, max) = spread(&t.ms);
+            let fps = 1e3 / median;
+            println!("frame      median {median:.1} ms (min {min:.1}, max {max:.1}), {fps:.2} fps");
+            print!("{}", report.text());
+        }
+        if timed.len() == 2 {
+            let (a, b) = (reports[0].accel, reports[1].accel);
+            println!(
+                "\nspeed      {a} / {b}: {:.3}x (median {:.1} ms against {:.1} ms; frames alternated)",
+                median(1) / median(0),
+                median(0),
+                median(1)
+            );
+        }
     }
     Ok(())
 }

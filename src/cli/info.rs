@@ -22,7 +22,8 @@ pub struct InfoArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
-    /// Also build this accelerator (none, grid, bvh2, bvh4, bvh8) and report its build time and shape.
+    /// Also build this accelerator (none, grid, bvh2, bvh4, bvh8, embree with the `embree` feature) and
+    /// report its build time and shape.
     #[arg(long)]
     accel: Option<AccelKind>,
     /// The BVH2 builder when `--accel bvh2`: sah or midpoint.
@@ -45,12 +46,15 @@ pub fn run(args: &InfoArgs) -> whitted::Result<()> {
     for w in &scene.warnings {
         eprintln!("whitted: warning: {w}");
     }
-    let built = args.accel.map(|kind| {
-        let start = Instant::now();
-        let options = build_options(args.build, args.bins as usize);
-        let accel = Accel::build_with(Prims::new(&scene), kind, options);
-        (start.elapsed().as_secs_f64(), accel)
-    });
+    let built = match args.accel {
+        Some(kind) => {
+            let start = Instant::now();
+            let options = build_options(args.build, args.bins as usize);
+            let accel = Accel::try_build_with(Prims::new(&scene), kind, options)?;
+            Some((start.elapsed().as_secs_f64(), accel))
+        }
+        None => None,
+    };
     let readme = args.spd.then(|| readme(&args.scene));
     if args.json {
         let mut out = json(&args.scene, &scene, load_s);
@@ -156,6 +160,16 @@ fn accel_json(accel: &Accel) -> Value {
         Accel::Bvh2(b) => tree_json(&b.stats()),
         Accel::Bvh4(b) => tree_json(&b.stats()),
         Accel::Bvh8(b) => tree_json(&b.stats()),
+        #[cfg(feature = "embree")]
+        Accel::Embree(e) => {
+            let (triangles, others) = e.counts();
+            json!({
+                "version": e.version(),
+                "quality": e.quality().name(),
+                "triangles": triangles,
+                "user_primitives": others,
+            })
+        }
     };
     if let Value::Object(shape) = shape {
         out.extend(shape);

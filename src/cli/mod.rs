@@ -56,9 +56,27 @@ pub enum Ended {
 /// The exit status of an interrupted command: 128 + SIGINT.
 const INTERRUPTED: u8 = 130;
 
+/// The exit status of a usage error (clap's).
+const USAGE: u8 = 2;
+
+/// Reports a command line clap refused, as clap does (help and version included), except `embree`
+/// asked of a build without it: one line that says how to build with it, and the usage error status.
+fn usage_error(e: clap::Error) -> ExitCode {
+    if e.kind() == clap::error::ErrorKind::ValueValidation
+        && e.to_string().contains(whitted::accel::NO_EMBREE)
+    {
+        eprintln!("whitted: {}", whitted::accel::NO_EMBREE);
+        return ExitCode::from(USAGE);
+    }
+    e.exit()
+}
+
 /// Runs the command line and turns errors into a message and an exit status.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return usage_error(e),
+    };
     let done = |result: whitted::Result<()>| result.map(|()| Ended::Done);
     let result = match cli.command {
         Command::Info(args) => done(info::run(&args)),

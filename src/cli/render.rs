@@ -110,7 +110,7 @@ pub fn run(args: &RenderArgs) -> whitted::Result<Ended> {
     let pool = thread_pool(plan.threads)?;
     let loaded = start.elapsed();
     let build_start = Instant::now();
-    let accel = Accel::build_with(Prims::new(&scene), plan.accel, plan.build);
+    let accel = pool.install(|| Accel::try_build_with(Prims::new(&scene), plan.accel, plan.build))?;
     let built = build_start.elapsed();
     warn(&plan.warnings);
     let renderer = Renderer::new(&scene, &accel, plan.options);

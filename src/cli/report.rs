@@ -230,12 +230,18 @@ pub fn accel_name(accel: &Accel) -> &'static str {
         Accel::Bvh2(_) => "bvh2",
         Accel::Bvh4(_) => "bvh4",
         Accel::Bvh8(_) => "bvh8",
+        #[cfg(feature = "embree")]
+        Accel::Embree(_) => "embree",
     }
 }
 
 /// The instruction set of a wide BVH's kernels; `scalar` for the structures that test one box at a
-/// time.
+/// time; `embree` for Embree, which picks its own (SSE2 to AVX-512) when its device is created.
 pub fn simd_name(accel: &Accel) -> &'static str {
+    #[cfg(feature = "embree")]
+    if let Accel::Embree(_) = accel {
+        return "embree";
+    }
     match accel.simd() {
         Some(Simd::Avx512) => "avx512",
         Some(Simd::Avx2) => "avx2",

@@ -13,7 +13,7 @@ use super::args::{FrameArgs, load_scene, resolution, thread_pool};
 #[command(after_help = "\
 Keys: W/A/S/D/Q/E move (forward, left, back, right, down, up); arrow keys turn; drag with the left \
 button to orbit the point looked at; the wheel zooms (field of view); R returns to the file's camera. \
-1-5: accelerator none/grid/bvh2/bvh4/bvh8; K: single/packet kernel; H: soft shadows; F: depth of field; \
+1-5: accelerator none/grid/bvh2/bvh4/bvh8 (6: embree, with the embree feature); K: single/packet kernel; H: soft shadows; F: depth of field; \
 [ and ]: fewer/more bounces; P: progressive refinement; F12 or Ctrl-S: save the image; Escape: quit.")]
 pub struct ViewArgs {
     /// The scene (.p3f, .nff, .ply, .obj, optionally .gz); the built-in default scene if omitted.

@@ -1,6 +1,8 @@
 //! Every accelerator and kernel, built over one scene and named: the one list the tests check and the
 //! benches measure, so that a structure, build option or instruction set added here is checked against
-//! brute force and measured beside the others without another line anywhere.
+//! brute force and measured beside the others without another line anywhere. With the `embree` feature
+//! Embree joins them (named `embree`), checked with [`Agreement::Edges`]: its own triangle test may
+//! part from ours where a ray crosses an edge.
 
 use super::oracle::Agreement;
 use crate::accel::bvh2::Builder;
@@ -91,11 +93,26 @@ pub struct Contestant<'a> {
 }
 
 impl Contestant<'_> {
-    /// True for the structures that trace a packet's rays together (the wide BVHs). The others answer
-    /// packets ray by ray: the tests still check that answer, but a bench would only time single rays
-    /// again.
+    /// True for the structures that trace a packet's rays together (the wide BVHs, Embree). The others
+    /// answer packets ray by ray: the tests still check that answer, but a bench would only time
+    /// single rays again.
     pub fn has_packet_kernel(&self) -> bool {
-        self.accel.simd().is_some()
+        self.accel.has_packet_kernel()
+    }
+
+    /// True for Embree, a peer's structure with its own triangle test (feature `embree`).
+    pub fn is_embree(&self) -> bool {
+        #[cfg(feature = "embree")]
+        if matches!(self.accel, Accel::Embree(_)) {
+            return true;
+        }
+        false
+    }
+
+    /// True where the images rendered are brute force's, byte for byte: every structure of ours, not
+    /// Embree (whose images `tests/embree.rs` compares within a tolerance).
+    pub fn same_images(&self) -> bool {
+        !self.is_embree()
     }
 
     /// True for the uniform grid: the reference where brute force on every ray would take minutes
@@ -106,10 +123,13 @@ impl Contestant<'_> {
 
     /// How closely it must agree with brute force. The grid tests the same primitives with the same
     /// code as brute force and keeps the same hit in ties: bit for bit. The hierarchies may reach
-    /// another of the primitives that meet at a hit point first: [`Agreement::Close`].
+    /// another of the primitives that meet at a hit point first: [`Agreement::Close`]. Embree's own
+    /// triangle test may round the other way at an edge: [`Agreement::Edges`].
     pub fn agreement(&self) -> Agreement {
         if self.is_grid() {
             Agreement::Exact
+        } else if self.is_embree() {
+            Agreement::Edges
         } else {
             Agreement::Close
         }
@@ -124,9 +144,10 @@ const SIMD: [(Simd, &str); 3] = [
 ];
 
 /// Every build of [`BUILDS`] over `prims`, each built once (on the current rayon pool), the wide BVHs at
-/// their default build once per instruction set this CPU has (copies of one build). On a CPU without
-/// AVX2 or AVX-512 it says, on stderr, which kernels are not there; a set the CPU has but a structure
-/// refuses is a bug, and panics.
+/// their default build once per instruction set this CPU has (copies of one build), then, with the
+/// `embree` feature, Embree (`--accel embree`'s build). On a CPU without AVX2 or AVX-512 it says, on
+/// stderr, which kernels are not there; a set the CPU has but a structure refuses is a bug, and
+/// panics, as does an Embree that fails to build.
 pub fn all(prims: Prims<'_>) -> Vec<Contestant<'_>> {
     if !Simd::Avx2.available() {
         eprintln!("this CPU has no AVX2: the wide BVHs run their portable kernels only");
@@ -160,5 +181,10 @@ pub fn all(prims: Prims<'_>) -> Vec<Contestant<'_>> {
             }
         }
     }
+    #[cfg(feature = "embree")]
+    out.push(Contestant {
+        name: "embree".into(),
+        accel: Accel::build_with(prims, AccelKind::Embree, SAH),
+    });
     out
 }

@@ -144,7 +144,12 @@ pub(crate) fn render_loop(
         let slot = match built.iter().position(|(kind, _)| *kind == job.accel) {
             Some(slot) => slot,
             None => {
-                let accel = pool.install(|| Accel::build(Prims::new(scene), job.accel));
+                let build = |kind| Accel::try_build_with(Prims::new(scene), kind, Default::default());
+                // Only Embree can fail to build (out of memory, say): then the best of ours stands in.
+                let accel = pool.install(|| build(job.accel)).unwrap_or_else(|e| {
+                    eprintln!("whitted: {e}; {:?} renders instead", AccelKind::best());
+                    pool.install(|| Accel::build(Prims::new(scene), AccelKind::best()))
+                });
                 built.push((job.accel, accel));
                 built.len() - 1
             }

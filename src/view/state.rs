@@ -66,7 +66,7 @@ pub enum Key {
     TurnDown,
     /// R: back to the scene file's camera.
     Reset,
-    /// 1 to 5: the accelerator.
+    /// 1 to 5 (6: Embree, with the `embree` feature): the accelerator.
     Accel(AccelKind),
     /// K: single rays or packets.
     Kernel,

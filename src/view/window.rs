@@ -353,6 +353,8 @@ fn key_of(code: KeyCode) -> Option<Key> {
         KeyCode::Digit3 => Key::Accel(AccelKind::Bvh2),
         KeyCode::Digit4 => Key::Accel(AccelKind::Bvh4),
         KeyCode::Digit5 => Key::Accel(AccelKind::Bvh8),
+        #[cfg(feature = "embree")]
+        KeyCode::Digit6 => Key::Accel(AccelKind::Embree),
         KeyCode::KeyK => Key::Kernel,
         KeyCode::KeyH => Key::SoftShadows,
         KeyCode::KeyF => Key::DepthOfField,

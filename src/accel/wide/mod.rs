@@ -127,6 +127,11 @@ impl<'a, const W: usize> WideBvh<'a, W> {
         }
     }
 
+    /// The scene's primitives.
+    pub fn prims(&self) -> Prims<'a> {
+        self.prims
+    }
+
     /// The instruction set the kernels use (the BVH4's single-ray kernel is SSE on any CPU).
     pub fn simd(&self) -> Simd {
         self.isa.simd()
