@@ -96,8 +96,8 @@ impl FromStr for AccelKind {
             #[cfg(not(feature = "embree"))]
             "embree" => Err(NO_EMBREE.to_string()),
             _ => Err(format!(
-                "unknown accelerator \"{s}\": expected none, grid, bvh2, bvh4, bvh8, {}or auto",
-                if cfg!(feature = "embree") { "embree " } else { "" }
+                "unknown accelerator \"{s}\": expected none, grid, bvh2, bvh4, bvh8{} or auto",
+                if cfg!(feature = "embree") { ", embree" } else { "" }
             )),
         }
     }

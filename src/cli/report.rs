@@ -47,6 +47,8 @@ pub enum Format {
 pub struct Report {
     /// The scene as given, or `(default scene)`.
     pub scene: String,
+    /// The CPU it ran on ([`whitted::machine::cpu`]).
+    pub cpu: String,
     /// What was rendered (an SPD frame's size is its corners').
     pub options: Options,
     /// The structure built (a wide BVH too large for its references is a BVH2).
@@ -77,6 +79,7 @@ impl Report {
     ) -> Report {
         Report {
             scene: scene.map_or("(default scene)".into(), |p| p.display().to_string()),
+            cpu: whitted::machine::cpu(),
             options: *options,
             accel: accel_name(accel),
             simd: simd_name(accel),
@@ -153,7 +156,7 @@ impl Report {
             self.options.spp_taken(),
             self.options.max_depth
         );
-        out += &format!("cpu        {}\n", whitted::machine::cpu());
+        out += &format!("cpu        {}\n", self.cpu);
         let [load, build, render] = self.times;
         let (what, passes) = match (self.per_frame, self.passes) {
             (true, _) => ("frame (median)", String::new()),
@@ -188,7 +191,7 @@ impl Report {
         let [load, build, render] = self.times;
         let mut out = match json!({
             "version": VERSION,
-            "cpu": whitted::machine::cpu(),
+            "cpu": self.cpu,
             "scene": self.scene,
             "width": w,
             "height": h,
@@ -363,6 +366,7 @@ mod tests {
         };
         Report {
             scene: "scenes/spd/tetra_x.nff".into(),
+            cpu: "Test CPU (family 6, model 1), 2 logical CPUs".into(),
             options,
             accel: "bvh4",
             simd: "portable",
@@ -377,7 +381,8 @@ mod tests {
     #[test]
     fn json_has_the_figures_and_the_rates_over_the_render_time() {
         let want = json!({
-            "version": VERSION, "scene": "scenes/spd/tetra_x.nff", "width": 513, "height": 513,
+            "version": VERSION, "cpu": "Test CPU (family 6, model 1), 2 logical CPUs",
+            "scene": "scenes/spd/tetra_x.nff", "width": 513, "height": 513,
             "spp": 0, "max_depth": 4, "accel": "bvh4", "simd": "portable", "kernel": "packet",
             "threads": 2, "passes": 1, "load_s": 0.25, "build_s": 0.125, "render_s": 0.5,
             "rays": {"primary": 1000, "primary_hits": 500, "shadow": 2000, "reflected": 300,
@@ -391,7 +396,7 @@ mod tests {
         // In the order written, as the README lists them.
         let json = report(false).json();
         let keys: Vec<&str> = json.keys().map(String::as_str).collect();
-        assert_eq!(keys[..3], ["version", "scene", "width"]);
+        assert_eq!(keys[..4], ["version", "cpu", "scene", "width"]);
     }
 
     #[test]
@@ -425,6 +430,7 @@ mod tests {
     fn text_is_a_table_of_the_same_figures() {
         let want = format!(
             "whitted {VERSION}: scenes/spd/tetra_x.nff, 512x512, spp 0, depth 4, bvh4 (portable), packet kernel, 2 threads
+cpu        Test CPU (family 6, model 1), 2 logical CPUs
 time       load 0.250 s, build 0.125 s, render 0.500 s
 rays                count    Mrays/s
   primary            1000       0.00
