@@ -7,9 +7,8 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
-use common::{root, whitted};
+use common::{ok, root, whitted};
 use serde_json::Value;
 
 /// The built-in scene's file: a glass ball, a mirror ball (no roughness given), a copper box and a red
@@ -17,18 +16,6 @@ use serde_json::Value;
 const DEFAULT: &str = "scenes/default.p3f";
 /// A lens (aperture 12, focal 1.5) and spp 4.
 const DOF: &str = "scenes/dof.p3f";
-
-/// The output of `whitted ARGS`, which must succeed.
-fn ok(args: &[&str]) -> Output {
-    let out = whitted(args);
-    assert!(
-        out.status.success(),
-        "whitted {}: {}",
-        args.join(" "),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
 
 /// stdout of `whitted ARGS`, which must succeed.
 fn stdout(args: &[&str]) -> String {

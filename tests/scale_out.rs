@@ -5,23 +5,12 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
-use common::{root, whitted};
+use common::{ok as run, root, whitted};
 
 /// The scene with every effect on: AA, a quad light's soft shadows, depth of field, a rough mirror.
 const SCENE: &str = "scenes/distribution.p3f";
-
-fn run(args: &[&str]) -> Output {
-    let out = whitted(args);
-    assert!(
-        out.status.success(),
-        "whitted {}: {}",
-        args.join(" "),
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
 
 fn path(dir: &Path, name: &str) -> String {
     dir.join(name).to_string_lossy().into_owned()

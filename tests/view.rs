@@ -335,7 +335,7 @@ mod keys {
     use std::path::Path;
     use std::process::{Child, Command, ExitStatus, Stdio};
     use std::sync::mpsc::{Receiver, channel};
-    use std::time::{Duration, Instant};
+    use std::time::Duration;
 
     use x11rb::connection::{Connection, RequestConnection};
     use x11rb::protocol::xproto::{
@@ -371,15 +371,18 @@ mod keys {
         window: Window,
     }
 
+    /// Polls of [`until`] before it gives up on a viewer that never gets there (a hang guard, not a
+    /// measure of speed: a slow machine only polls more).
+    const POLLS: u32 = 3000;
+
     fn until<T>(what: &str, mut f: impl FnMut() -> Option<T>) -> T {
-        let start = Instant::now();
-        loop {
+        for _ in 0..POLLS {
             if let Some(v) = f() {
                 return v;
             }
-            assert!(start.elapsed() < PATIENCE, "timed out waiting for {what}");
             std::thread::sleep(Duration::from_millis(20));
         }
+        panic!("gave up waiting for {what} after {POLLS} polls");
     }
 
     impl Viewer {

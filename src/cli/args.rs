@@ -263,12 +263,7 @@ mod tests {
     use super::*;
     use crate::cli::plan::Plan;
 
-    /// `whitted render`'s arguments alone, to parse in tests.
-    #[derive(Parser)]
-    struct Render {
-        #[command(flatten)]
-        args: RenderArgs,
-    }
+    use crate::cli::render::Render;
 
     /// The plan of `whitted render` with `words` for the built-in scene (or the scene they name), and
     /// that scene after the plan's overrides.

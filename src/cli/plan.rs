@@ -205,12 +205,7 @@ mod tests {
     use super::*;
     use crate::cli::args::load_scene;
 
-    /// `whitted render`'s arguments alone, to parse in tests.
-    #[derive(Parser)]
-    struct Render {
-        #[command(flatten)]
-        args: RenderArgs,
-    }
+    use crate::cli::render::Render;
 
     /// The plan of `whitted render ARGS` for the built-in scene (640x480, spp 0), and that scene after
     /// the plan's overrides.

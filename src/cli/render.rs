@@ -410,6 +410,14 @@ impl Progress {
     }
 }
 
+/// `whitted render`'s arguments alone, for the tests of the modules that take them.
+#[cfg(test)]
+#[derive(clap::Parser)]
+pub(super) struct Render {
+    #[command(flatten)]
+    pub args: RenderArgs,
+}
+
 #[cfg(test)]
 mod tests {
     use std::io::IsTerminal;
@@ -417,13 +425,6 @@ mod tests {
     use clap::Parser;
 
     use super::*;
-
-    /// `whitted render`'s arguments alone, to parse in tests.
-    #[derive(Parser)]
-    struct Render {
-        #[command(flatten)]
-        args: RenderArgs,
-    }
 
     /// The plan of `whitted render ARGS` for the built-in scene (640x480: 40 x 30 tiles).
     fn plan(args: &str) -> Plan {

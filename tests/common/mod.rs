@@ -97,3 +97,15 @@ pub fn cpu_line() -> String {
     };
     format!("{name}, {logical} logical CPUs")
 }
+
+/// The output of `whitted ARGS`, which must succeed (its stderr in the panic message otherwise).
+pub fn ok(args: &[&str]) -> Output {
+    let out = whitted(args);
+    assert!(
+        out.status.success(),
+        "whitted {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
