@@ -41,6 +41,39 @@ pub(super) trait Lanes<const N: usize>: Copy {
     fn mul(self, o: Self) -> Self;
     /// The bit mask of the lanes where `self <= o` (ordered: false on NaN).
     fn le(self, o: Self) -> u32;
+    /// Lane-wise sum.
+    fn add(self, o: Self) -> Self;
+    /// Lane-wise quotient.
+    fn div(self, o: Self) -> Self;
+    /// Each lane with its sign bit flipped (as `wide`'s `-`).
+    fn neg(self) -> Self;
+    /// Each lane with its sign bit cleared (as `wide`'s `abs`).
+    fn abs(self) -> Self;
+    /// The bit mask of the lanes where `self < o` (ordered).
+    fn lt(self, o: Self) -> u32;
+    /// The bit mask of the lanes where `self >= o` (ordered).
+    fn ge(self, o: Self) -> u32;
+    /// The bit mask of the lanes where `self != o` (unordered: true on NaN, as SSE's `cmpneqps`).
+    fn ne(self, o: Self) -> u32;
+}
+
+/// Eight lanes that can be filled from two halves of four: two four-triangle leaf blocks side by side
+/// ([`super::tri4::Tri4::intersect_pair`]).
+pub(super) trait Lanes8: Lanes<8> {
+    /// Whether the eight lanes are one register: where they are two SSE halves, an eight-lane step
+    /// costs two four-lane ones and more to fill (measured +1-2% instructions a ray).
+    const ONE_REGISTER: bool;
+    /// Lanes 0-3 from `lo`, 4-7 from `hi`.
+    fn halves(lo: &[f32; 4], hi: &[f32; 4]) -> Self;
+}
+
+impl Lanes8 for f32x8 {
+    const ONE_REGISTER: bool = cfg!(target_feature = "avx");
+
+    #[inline(always)]
+    fn halves(lo: &[f32; 4], hi: &[f32; 4]) -> Self {
+        f32x8::new([lo[0], lo[1], lo[2], lo[3], hi[0], hi[1], hi[2], hi[3]])
+    }
 }
 
 /// [`Lanes`] over `wide`'s types, written once for both widths.
@@ -78,6 +111,34 @@ macro_rules! wide_lanes {
             #[inline(always)]
             fn le(self, o: Self) -> u32 {
                 self.simd_le(o).to_bitmask()
+            }
+            #[inline(always)]
+            fn add(self, o: Self) -> Self {
+                self + o
+            }
+            #[inline(always)]
+            fn div(self, o: Self) -> Self {
+                self / o
+            }
+            #[inline(always)]
+            fn neg(self) -> Self {
+                -self
+            }
+            #[inline(always)]
+            fn abs(self) -> Self {
+                <$v>::abs(self)
+            }
+            #[inline(always)]
+            fn lt(self, o: Self) -> u32 {
+                self.simd_lt(o).to_bitmask()
+            }
+            #[inline(always)]
+            fn ge(self, o: Self) -> u32 {
+                self.simd_ge(o).to_bitmask()
+            }
+            #[inline(always)]
+            fn ne(self, o: Self) -> u32 {
+                self.simd_ne(o).to_bitmask()
             }
         }
     };
@@ -142,10 +203,58 @@ impl<const MASK: bool> Lanes<8> for Avx8<MASK> {
     }
     #[inline(always)]
     fn le(self, o: Self) -> u32 {
+        self.cmp::<_CMP_LE_OQ>(o)
+    }
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Avx8(avx!(_mm256_add_ps(self.0, o.0)))
+    }
+    #[inline(always)]
+    fn div(self, o: Self) -> Self {
+        Avx8(avx!(_mm256_div_ps(self.0, o.0)))
+    }
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Avx8(avx!(_mm256_xor_ps(self.0, _mm256_set1_ps(-0.0))))
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Avx8(avx!(_mm256_andnot_ps(_mm256_set1_ps(-0.0), self.0)))
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> u32 {
+        self.cmp::<_CMP_LT_OQ>(o)
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> u32 {
+        self.cmp::<_CMP_GE_OQ>(o)
+    }
+    #[inline(always)]
+    fn ne(self, o: Self) -> u32 {
+        self.cmp::<_CMP_NEQ_UQ>(o)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl<const MASK: bool> Lanes8 for Avx8<MASK> {
+    const ONE_REGISTER: bool = true;
+
+    #[inline(always)]
+    fn halves(lo: &[f32; 4], hi: &[f32; 4]) -> Self {
+        // Two unaligned loads of four floats from four-float arrays, into one register.
+        Avx8(avx!(_mm256_loadu2_m128(hi.as_ptr(), lo.as_ptr())))
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl<const MASK: bool> Avx8<MASK> {
+    /// The bit mask of the lanes where `self OP o`: with `MASK`, one compare into a mask register.
+    #[inline(always)]
+    fn cmp<const OP: i32>(self, o: Self) -> u32 {
         if MASK {
-            u32::from(avx!(_mm256_cmp_ps_mask::<_CMP_LE_OQ>(self.0, o.0)))
+            u32::from(avx!(_mm256_cmp_ps_mask::<OP>(self.0, o.0)))
         } else {
-            avx!(_mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(self.0, o.0))) as u32
+            avx!(_mm256_movemask_ps(_mm256_cmp_ps::<OP>(self.0, o.0))) as u32
         }
     }
 }
@@ -252,7 +361,7 @@ impl Isa {
 /// A kernel over eight-lane vectors, for [`Isa::run8`] to run on the lane type it chose.
 pub(super) trait OnLanes8 {
     type Output;
-    fn run<L: Lanes<8>>(self) -> Self::Output;
+    fn run<L: Lanes8>(self) -> Self::Output;
 }
 
 /// `k` compiled for AVX2 (the whole kernel, so that its intrinsics and `wide`'s operations inline into

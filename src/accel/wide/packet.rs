@@ -32,7 +32,7 @@
 
 use std::marker::PhantomData;
 
-use super::lanes::{Lanes, OnLanes8, SlabRays, slab};
+use super::lanes::{Lanes8, OnLanes8, SlabRays, slab};
 use super::traverse::sort_far_to_near;
 use super::{ChildRef, EMPTY, LEAF, STACK, WideBvh};
 use crate::accel::packet::{HitPacket, PACKET, RayPacket, bits};
@@ -97,7 +97,7 @@ impl<P: HitPolicy, const W: usize> OnLanes8 for Packet<'_, '_, P, W> {
 
     /// The packet kernel's one body, over the lane type `L`.
     #[inline(always)]
-    fn run<L: Lanes<PACKET>>(self) -> u8 {
+    fn run<L: Lanes8>(self) -> u8 {
         let Packet {
             bvh,
             rays,
@@ -137,7 +137,7 @@ impl<P: HitPolicy, const W: usize> OnLanes8 for Packet<'_, '_, P, W> {
                 let mut hit = 0;
                 for k in bits(mask as u8) {
                     let mut one = false;
-                    bvh.leaf::<P>(current, &rays[k], t_min, &mut hits[k], &mut one);
+                    bvh.leaf::<P, L>(current, &rays[k], t_min, &mut hits[k], &mut one);
                     hit |= u32::from(one) << k;
                 }
                 if hit != 0 {

@@ -9,9 +9,10 @@
 
 use std::marker::PhantomData;
 
-use wide::f32x4;
+use wide::{f32x4, f32x8};
 
-use super::lanes::{Lanes, OnLanes8, SlabRays, slab};
+use super::lanes::{Lanes, Lanes8, OnLanes8, SlabRays, slab};
+use super::tri4::Tri4;
 use super::{Bvh4, Bvh8, ChildRef, EMPTY, LEAF, STACK, TRIANGLES, WideBvh, leaf_parts};
 use crate::accel::policy::HitPolicy;
 use crate::accel::prims::Hit;
@@ -23,7 +24,7 @@ impl Bvh4<'_> {
     /// Four lanes are one SSE register on every x86-64 CPU: no dispatch.
     #[inline]
     pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
-        self.single::<P, f32x4>(ray, t_min, hit)
+        self.single::<P, f32x4, f32x8>(ray, t_min, hit)
     }
 }
 
@@ -55,18 +56,20 @@ impl<P: HitPolicy> OnLanes8 for Single<'_, '_, P> {
     type Output = bool;
 
     #[inline(always)]
-    fn run<L: Lanes<8>>(self) -> bool {
-        self.bvh.single::<P, L>(self.ray, self.t_min, self.hit)
+    fn run<L: Lanes8>(self) -> bool {
+        self.bvh.single::<P, L, L>(self.ray, self.t_min, self.hit)
     }
 }
 
 impl<const W: usize> WideBvh<'_, W> {
     /// Tests the primitives of leaf `r` against one ray; sets `found` on a hit and returns true if the
-    /// search is over (any-hit found one). Triangles go four at a time through their SIMD blocks, in
-    /// order, a hit kept only when strictly nearer; other kinds one by one. The packet kernel calls this
-    /// for each of its rays, so both kernels find the same hits, ties included.
+    /// search is over (any-hit found one). Triangles go eight at a time where `T` is one register (two
+    /// of their four-triangle SIMD blocks side by side, [`Tri4::intersect_pair`]), else (and a last odd
+    /// block) four at a time, a hit kept only when strictly nearer: the block order's first among equal
+    /// `t`. Other kinds go one by one. The packet kernel calls this for each of its rays, so both
+    /// kernels find the same hits, ties included.
     #[inline(always)]
-    pub(super) fn leaf<P: HitPolicy>(
+    pub(super) fn leaf<P: HitPolicy, T: Lanes8>(
         &self,
         r: ChildRef,
         ray: &Ray,
@@ -76,14 +79,17 @@ impl<const W: usize> WideBvh<'_, W> {
     ) -> bool {
         let (start, count) = leaf_parts(r);
         if r & TRIANGLES != 0 {
-            for block in &self.tris[start..start + count.div_ceil(4)] {
-                if let Some((k, t, u, v)) = block.intersect(ray.origin, ray.dir, t_min, hit.t) {
-                    *hit = Hit {
-                        t,
-                        prim: block.id[k],
-                        u,
-                        v,
-                    };
+            let blocks = &self.tris[start..start + count.div_ceil(4)];
+            for group in blocks.chunks(if T::ONE_REGISTER { 2 } else { 1 }) {
+                let lane = match group {
+                    [lo, hi] => Tri4::intersect_pair::<T>(lo, hi, ray.origin, ray.dir, t_min, hit.t)
+                        .map(|(k, t, u, v)| (group[k / 4].id[k % 4], t, u, v)),
+                    _ => group[0]
+                        .intersect(ray.origin, ray.dir, t_min, hit.t)
+                        .map(|(k, t, u, v)| (group[0].id[k], t, u, v)),
+                };
+                if let Some((prim, t, u, v)) = lane {
+                    *hit = Hit { t, prim, u, v };
                     *found = true;
                     if P::ANY {
                         return true;
@@ -101,7 +107,7 @@ impl<const W: usize> WideBvh<'_, W> {
 
     /// The one single-ray traversal, for both policies, every width and every lane type.
     #[inline(always)]
-    fn single<P: HitPolicy, L: Lanes<W>>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+    fn single<P: HitPolicy, L: Lanes<W>, T: Lanes8>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
         let mut found = self.prims.intersect_planes::<P>(ray, t_min, hit);
         if (P::ANY && found) || self.root == EMPTY {
             return found;
@@ -111,7 +117,7 @@ impl<const W: usize> WideBvh<'_, W> {
         let mut current = self.root;
         loop {
             if current & LEAF != 0 {
-                if self.leaf::<P>(current, ray, t_min, hit, &mut found) {
+                if self.leaf::<P, T>(current, ray, t_min, hit, &mut found) {
                     return true;
                 }
             } else {
