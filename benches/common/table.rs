@@ -6,7 +6,7 @@ use std::time::SystemTime;
 
 /// Where criterion keeps its results (its own rule: `CRITERION_HOME`, else the target directory's
 /// `criterion/`).
-fn criterion_home() -> PathBuf {
+pub fn criterion_home() -> PathBuf {
     if let Some(home) = std::env::var_os("CRITERION_HOME") {
         return PathBuf::from(home);
     }

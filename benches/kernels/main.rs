@@ -12,11 +12,13 @@
 //! workload document's figures on the full dragon), the reference's hit counts against brute force on a
 //! sample of each set, and every contestant's hit counts on every set against the reference's: a wrong
 //! benchmark measures nothing. Brute force is timed on those samples. At the end, a table of the medians
-//! side by side, per thread count.
+//! side by side, per thread count, and, once the other build (portable or native) has run on this CPU,
+//! native over portable per row with the rows where native is slower (`builds.rs`).
 //!
 //! `cargo bench --bench kernels`; `WHITTED_BENCH_QUICK=1` for a smoke run; `WHITTED_BENCH_SCENE` for one
 //! other scene (default: the full dragon, then res2).
 
+mod builds;
 #[path = "../common/mod.rs"]
 mod common;
 mod contestant;
@@ -309,11 +311,17 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
             rows.push((format!("our best {kind} / {}", peer.id()), cells));
         }
         let title = format!(
-            "{}: Mrays/s, {threads} thread{} (criterion medians)",
+            "{}: Mrays/s, {threads} thread{} (criterion medians, {} build)",
             path.display(),
-            if threads == 1 { "" } else { "s" }
+            if threads == 1 { "" } else { "s" },
+            builds::this_build()
         );
         table::print(&title, &header, &rows);
+        let figures: Vec<(String, Vec<Option<f64>>)> = contestants
+            .iter()
+            .map(|c| (c.id().to_string(), speed(*c)))
+            .collect();
+        builds::record_and_compare(&format!("{group}-{threads}t"), &header[1..], &figures);
     }
     #[cfg(feature = "bench-tinybvh")]
     println!(
