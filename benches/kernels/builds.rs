@@ -4,7 +4,9 @@
 //! wide BVHs reach AVX2 and AVX-512 by run-time dispatch alone). Each run keeps its Mrays/s per row under
 //! criterion's directory, named for its scene, thread count and build; once a run of the other build on
 //! the same CPU is there, the report prints native / portable for every row and names the rows where the
-//! native build is slower. One run each, alternately if in doubt: the two builds cannot share a run.
+//! native build is slower. The two builds cannot share a run, and the machine's speed drifts between
+//! runs; with `--features bench-embree`, Embree's row (a system library, the same code in both builds)
+//! measures that drift and every ratio is divided by it.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -52,29 +54,63 @@ pub fn record_and_compare(key: &str, header: &[&str], rows: &[(String, Vec<Optio
         println!("\n(the {other} run of {key} kept is from another CPU, {other_cpu}: not compared)");
         return;
     }
-    // Rows in this run's order, each as native / portable.
+    // Each row of both runs as native / portable per ray set, in this run's order.
+    let ratios: Vec<(&String, Vec<Option<f64>>)> = rows
+        .iter()
+        .filter_map(|(id, here)| {
+            let there = theirs.get(id)?;
+            let (native, portable) = if this_build() == "native" {
+                (here, there)
+            } else {
+                (there, here)
+            };
+            let r = native
+                .iter()
+                .zip(portable)
+                .map(|(n, p)| n.zip(*p).map(|(n, p)| n / p));
+            Some((id, r.collect()))
+        })
+        .collect();
+    // The two builds ran at different times, and these machines' speed drifts by more than the
+    // differences looked for. Embree is the same library code in both builds: its own ratio is the
+    // drift, and every row is divided by it.
+    let drift = ratios
+        .iter()
+        .find(|(id, _)| id.as_str() == YARDSTICK)
+        .map(|(_, r)| r.clone());
+    match &drift {
+        Some(d) => println!(
+            "\n{YARDSTICK}, the same code in both builds, measured {} native / portable: the machine's drift \
+             between the runs, divided out below",
+            d.iter()
+                .map(|r| r.map_or("-".into(), |r| format!("{r:.2}x")))
+                .collect::<Vec<_>>()
+                .join(" / ")
+        ),
+        None => println!(
+            "\n(no {YARDSTICK} row, built with `--features bench-embree`, to divide out the machine's drift \
+             between the two runs: the ratios below include it)"
+        ),
+    }
     let mut slower = Vec::new();
     let mut table_rows = Vec::new();
-    for (id, here) in rows {
-        let Some(there) = theirs.get(id) else { continue };
-        let (native, portable) = if this_build() == "native" {
-            (here, there)
-        } else {
-            (there, here)
-        };
-        let cells: Vec<Option<String>> = native
+    for (id, r) in &ratios {
+        let cells: Vec<Option<String>> = r
             .iter()
-            .zip(portable)
+            .enumerate()
             .zip(header)
-            .map(|((n, p), set)| {
-                let ratio = n.zip(*p).map(|(n, p)| n / p)?;
+            .map(|((i, ratio), set)| {
+                let ratio = match &drift {
+                    Some(d) => ratio.zip(d[i]).map(|(r, d)| r / d)?,
+                    None => (*ratio)?,
+                };
                 if ratio < 1.0 - TOLERANCE {
                     slower.push(format!("{id} {set} ({ratio:.2}x)"));
                 }
                 Some(format!("{ratio:.2}x"))
             })
             .collect();
-        table_rows.push((id.clone(), cells));
+        table_rows.push(((*id).clone(), cells));
     }
     let mut columns = vec!["native / portable"];
     columns.extend(header);
@@ -99,6 +135,9 @@ pub fn record_and_compare(key: &str, header: &[&str], rows: &[(String, Vec<Optio
 /// How much slower a native row may measure before it is named: criterion's medians of one run vary
 /// by a few percent on these machines.
 const TOLERANCE: f64 = 0.03;
+
+/// The row whose code does not depend on the build: Embree's single rays (a system library).
+const YARDSTICK: &str = "embree";
 
 /// A kept run: its CPU and rows.
 fn read(path: &std::path::Path) -> Option<Record> {
