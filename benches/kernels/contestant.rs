@@ -75,23 +75,6 @@ impl<'a> Ours<'a> {
         }
         out
     }
-
-    /// The segments eight at a time: each packet's rays, limits and mask, passed to `trace`; the sum of
-    /// the masks' bits it returns.
-    #[inline(always)]
-    fn packets_of(rays: &[Segment], trace: impl Fn(&[Ray; PACKET], u8, &[f32; PACKET]) -> u8) -> usize {
-        let mut found = 0;
-        for chunk in rays.chunks(PACKET) {
-            let mut r = [chunk[0].0; PACKET];
-            let mut t = [0.0; PACKET];
-            for (k, (ray, t_max)) in chunk.iter().enumerate() {
-                (r[k], t[k]) = (*ray, *t_max);
-            }
-            let active = (1u16 << chunk.len()).wrapping_sub(1) as u8;
-            found += trace(&r, active, &t).count_ones() as usize;
-        }
-        found
-    }
 }
 
 impl Contestant for Ours<'_> {
@@ -109,7 +92,7 @@ impl Contestant for Ours<'_> {
 
     fn closest(&self, rays: &[Segment]) -> usize {
         if self.packets {
-            return Self::packets_of(rays, |r, active, t_max| {
+            return packets_of(rays, |r, active, t_max| {
                 let mut hits = t_max.map(Hit::miss);
                 self.accel.intersect_packet(r, active, 0.0, &mut hits)
             });
@@ -124,7 +107,7 @@ impl Contestant for Ours<'_> {
 
     fn occluded(&self, rays: &[Segment]) -> usize {
         if self.packets {
-            return Self::packets_of(rays, |r, active, t_max| {
+            return packets_of(rays, |r, active, t_max| {
                 self.accel.occluded_packet(r, active, 0.0, t_max)
             });
         }
@@ -132,4 +115,21 @@ impl Contestant for Ours<'_> {
             .filter(|(ray, t_max)| self.accel.occluded(ray, 0.0, *t_max))
             .count()
     }
+}
+
+/// The segments eight at a time: each packet's rays, limits and mask, passed to `trace`; the sum of
+/// the masks' bits it returns.
+#[inline(always)]
+pub fn packets_of(rays: &[Segment], trace: impl Fn(&[Ray; PACKET], u8, &[f32; PACKET]) -> u8) -> usize {
+    let mut found = 0;
+    for chunk in rays.chunks(PACKET) {
+        let mut r = [chunk[0].0; PACKET];
+        let mut t = [0.0; PACKET];
+        for (k, (ray, t_max)) in chunk.iter().enumerate() {
+            (r[k], t[k]) = (*ray, *t_max);
+        }
+        let active = (1u16 << chunk.len()).wrapping_sub(1) as u8;
+        found += trace(&r, active, &t).count_ones() as usize;
+    }
+    found
 }

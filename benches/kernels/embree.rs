@@ -4,28 +4,9 @@
 //! high-quality (spatial split) BVH.
 
 use whitted::accel::embree::Embree as Scene;
-use whitted::accel::{Hit, PACKET, PrimKind};
+use whitted::accel::{Hit, PrimKind};
 
-use crate::contestant::{Contestant, FirstHit, Segment, Side};
-
-/// The segments eight at a time: each packet's rays, limits and mask, passed to `trace`; the sum of the
-/// masks' bits it returns.
-fn packets_of(
-    rays: &[Segment],
-    trace: impl Fn(&[whitted::geometry::ray::Ray; PACKET], u8, &[f32; PACKET]) -> u8,
-) -> usize {
-    let mut found = 0;
-    for chunk in rays.chunks(PACKET) {
-        let mut r = [chunk[0].0; PACKET];
-        let mut t = [0.0; PACKET];
-        for (k, (ray, t_max)) in chunk.iter().enumerate() {
-            (r[k], t[k]) = (*ray, *t_max);
-        }
-        let active = (1u16 << chunk.len()).wrapping_sub(1) as u8;
-        found += trace(&r, active, &t).count_ones() as usize;
-    }
-    found
-}
+use crate::contestant::{Contestant, FirstHit, Segment, Side, packets_of};
 
 /// The triangle a segment hits first by Embree's test (`rtcIntersect1`), if any.
 struct First<'a>(&'a Scene<'a>);

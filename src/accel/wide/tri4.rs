@@ -10,7 +10,7 @@
 use glam::Vec3;
 use wide::f32x4;
 
-use super::lanes::Lanes8;
+use super::lanes::{Lanes, Lanes8};
 use crate::scene::Triangles;
 
 /// Four triangles (unused lanes are degenerate: zero edges, never hit).
@@ -59,15 +59,13 @@ impl Tri4 {
         t_min: f32,
         t_max: f32,
     ) -> Option<(usize, f32, f32, f32)> {
-        let (t, u, v, mask) = self.intersect4(origin, dir, t_min, t_max);
-        let t = t.to_array();
-        nearest(mask, t).map(|k| (k, t[k], u.to_array()[k], v.to_array()[k]))
+        nearest(self.intersect4(origin, dir, t_min, t_max))
     }
 
     /// The nearest hit of the eight triangles of `lo` and `hi` side by side in the eight lanes `L` (one
     /// AVX step where four-lane blocks take two), with `t` in `(t_min, t_max)`: `(lane, t, u, v)`, lanes
     /// 0-3 being `lo`'s and 4-7 `hi`'s; on equal `t` the lowest lane, so `lo`'s hit wins a tie as it
-    /// would tested first. Each lane's arithmetic is [`Tri4::intersect4`]'s, operation for operation.
+    /// would tested first. Each lane's arithmetic is [`Tri4::intersect4`]'s: the one [`moller_trumbore`].
     #[inline(always)]
     pub(super) fn intersect_pair<L: Lanes8>(
         lo: &Tri4,
@@ -84,83 +82,73 @@ impl Tri4 {
                 L::halves(&a[2], &b[2]),
             ]
         };
-        let (v0, e1, e2, n) = (
+        let block = [
             ld(&lo.v0, &hi.v0),
             ld(&lo.e1, &hi.e1),
             ld(&lo.e2, &hi.e2),
             ld(&lo.n, &hi.n),
-        );
-        let d = [L::splat(dir.x), L::splat(dir.y), L::splat(dir.z)];
-        let s = [
-            L::splat(origin.x).sub(v0[0]),
-            L::splat(origin.y).sub(v0[1]),
-            L::splat(origin.z).sub(v0[2]),
         ];
-        let r = [
-            s[1].mul(d[2]).sub(d[1].mul(s[2])),
-            s[2].mul(d[0]).sub(d[2].mul(s[0])),
-            s[0].mul(d[1]).sub(d[0].mul(s[1])),
-        ];
-        let dot = |a: &[L; 3], b: &[L; 3]| a[0].mul(b[0]).add(a[1].mul(b[1])).add(a[2].mul(b[2]));
-        let det = dot(&n, &d).neg();
-        let zero = L::splat(0.0);
-        let finite = det.abs().lt(L::splat(f32::INFINITY));
-        let inv_det = L::splat(1.0).div(det);
-        let u = dot(&e2, &r).mul(inv_det);
-        let v = dot(&e1, &r).neg().mul(inv_det);
-        let t = dot(&n, &s).mul(inv_det);
-        let ok = det.ne(zero)
-            & finite
-            & u.ge(zero)
-            & v.ge(zero)
-            & u.add(v).le(L::splat(1.0))
-            & L::splat(t_min).lt(t)
-            & t.lt(L::splat(t_max));
-        nearest(ok, t.to_array()).map(|k| (k, t.to_array()[k], u.to_array()[k], v.to_array()[k]))
+        nearest(moller_trumbore(block, origin, dir, t_min, t_max))
     }
 
     /// All four lanes: `t`, `u`, `v` and the bit mask of lanes that hit within `(t_min, t_max)`.
     #[inline(always)]
     pub fn intersect4(&self, origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> (f32x4, f32x4, f32x4, u32) {
         let ld = |a: &[[f32; 4]; 3]| [f32x4::new(a[0]), f32x4::new(a[1]), f32x4::new(a[2])];
-        let (v0, e1, e2, n) = (ld(&self.v0), ld(&self.e1), ld(&self.e2), ld(&self.n));
-        let d = [f32x4::splat(dir.x), f32x4::splat(dir.y), f32x4::splat(dir.z)];
-        let s = [
-            f32x4::splat(origin.x) - v0[0],
-            f32x4::splat(origin.y) - v0[1],
-            f32x4::splat(origin.z) - v0[2],
-        ];
-        // r = s × d, as glam's cross.
-        let r = [
-            s[1] * d[2] - d[1] * s[2],
-            s[2] * d[0] - d[2] * s[0],
-            s[0] * d[1] - d[0] * s[1],
-        ];
-        let dot = |a: &[f32x4; 3], b: &[f32x4; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        let det = -dot(&n, &d);
-        let zero = f32x4::splat(0.0);
-        let finite = det.abs().simd_lt(f32x4::splat(f32::INFINITY));
-        let inv_det = f32x4::splat(1.0) / det;
-        let u = dot(&e2, &r) * inv_det;
-        let v = -dot(&e1, &r) * inv_det;
-        let t = dot(&n, &s) * inv_det;
-        let ok = det.simd_ne(zero)
-            & finite
-            & u.simd_ge(zero)
-            & v.simd_ge(zero)
-            & (u + v).simd_le(f32x4::splat(1.0))
-            & t.simd_gt(f32x4::splat(t_min))
-            & t.simd_lt(f32x4::splat(t_max));
-        (t, u, v, ok.to_bitmask())
+        let block = [ld(&self.v0), ld(&self.e1), ld(&self.e2), ld(&self.n)];
+        moller_trumbore(block, origin, dir, t_min, t_max)
     }
 }
 
-/// The lane of `mask` with the least `t`, the lowest such lane on a tie; `None` for an empty mask.
+/// The scalar routine's Möller–Trumbore test on `N` triangles in lanes (`[v0, e1, e2, n]`, component
+/// arrays), operation for operation: each lane's `t`, `u`, `v` and the bit mask of the lanes hit within
+/// `(t_min, t_max)`. Both block widths run this one body.
 #[inline(always)]
-fn nearest<const N: usize>(mask: u32, t: [f32; N]) -> Option<usize> {
+fn moller_trumbore<const N: usize, L: Lanes<N>>(
+    [v0, e1, e2, n]: [[L; 3]; 4],
+    origin: Vec3,
+    dir: Vec3,
+    t_min: f32,
+    t_max: f32,
+) -> (L, L, L, u32) {
+    let d = [L::splat(dir.x), L::splat(dir.y), L::splat(dir.z)];
+    let s = [
+        L::splat(origin.x).sub(v0[0]),
+        L::splat(origin.y).sub(v0[1]),
+        L::splat(origin.z).sub(v0[2]),
+    ];
+    // r = s × d, as glam's cross.
+    let r = [
+        s[1].mul(d[2]).sub(d[1].mul(s[2])),
+        s[2].mul(d[0]).sub(d[2].mul(s[0])),
+        s[0].mul(d[1]).sub(d[0].mul(s[1])),
+    ];
+    let dot = |a: &[L; 3], b: &[L; 3]| a[0].mul(b[0]).add(a[1].mul(b[1])).add(a[2].mul(b[2]));
+    let det = dot(&n, &d).neg();
+    let zero = L::splat(0.0);
+    let finite = det.abs().lt(L::splat(f32::INFINITY));
+    let inv_det = L::splat(1.0).div(det);
+    let u = dot(&e2, &r).mul(inv_det);
+    let v = dot(&e1, &r).neg().mul(inv_det);
+    let t = dot(&n, &s).mul(inv_det);
+    let ok = det.ne(zero)
+        & finite
+        & u.ge(zero)
+        & v.ge(zero)
+        & u.add(v).le(L::splat(1.0))
+        & L::splat(t_min).lt(t)
+        & t.lt(L::splat(t_max));
+    (t, u, v, ok)
+}
+
+/// The hit lane of a block test's `(t, u, v, mask)` with the least `t` (the lowest such lane on a tie):
+/// `(lane, t, u, v)`; `None` for an empty mask.
+#[inline(always)]
+fn nearest<const N: usize, L: Lanes<N>>((t, u, v, mask): (L, L, L, u32)) -> Option<(usize, f32, f32, f32)> {
     if mask == 0 {
         return None;
     }
+    let t = t.to_array();
     let mut best = mask.trailing_zeros() as usize;
     let mut rest = mask & (mask - 1);
     while rest != 0 {
@@ -170,13 +158,14 @@ fn nearest<const N: usize>(mask: u32, t: [f32; N]) -> Option<usize> {
             best = k;
         }
     }
-    Some(best)
+    Some((best, t[best], u.to_array()[best], v.to_array()[best]))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::accel::wide::lanes::{Isa, OnLanes8, Simd};
+    use crate::geometry::ray::testing::TestRng;
     use crate::geometry::{ray::Ray, triangle};
     use crate::scene::{Camera, Material, Scene};
 
@@ -206,13 +195,8 @@ mod tests {
     fn pairs_match_two_blocks_in_turn() {
         let mut s = Scene::new(Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 45.0, 8, 8));
         let m = s.add_material(Material::default());
-        let mut x = 7u64;
-        let mut r = || {
-            x = x
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (x >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut rng = TestRng::new(7);
+        let mut r = || rng.range(-1.0, 1.0);
         for i in 0..2000 {
             let p = Vec3::new(r(), r(), r());
             s.add_triangle(p, p + Vec3::new(r(), r(), r()), p + Vec3::new(r(), r(), r()), m);
