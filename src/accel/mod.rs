@@ -10,6 +10,7 @@ pub mod bvh2;
 pub mod embree;
 pub mod grid;
 pub mod packet;
+pub mod pages;
 pub mod policy;
 pub mod prims;
 pub mod stack;

@@ -21,6 +21,7 @@ pub use lanes::Simd;
 use glam::Vec3;
 
 use super::bvh2::{self, Builder, Bvh2, Stats};
+use super::pages::on_huge_pages;
 use super::prims::Prims;
 use crate::geometry::aabb::Aabb;
 use lanes::Isa;
@@ -118,9 +119,9 @@ impl<'a, const W: usize> WideBvh<'a, W> {
         let c = collapse::collapse::<W>(&bvh2.nodes, &bvh2.ids, bvh2.prims());
         WideBvh {
             prims: *bvh2.prims(),
-            nodes: c.nodes,
+            nodes: on_huge_pages(c.nodes),
             ids: bvh2.ids,
-            tris: c.tris,
+            tris: on_huge_pages(c.tris),
             root: c.root,
             bounds: bvh2.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds),
             isa: Isa::detect(),
