@@ -3,7 +3,9 @@
 # writes profiles/NAME.txt with the loop's instructions per ray (per triangle for the build) and the
 # functions its instructions go to (exclusive counts). Instruction counts are repeatable (the same binary
 # and inputs give the same total on a busy machine), unlike times; compare them across commits, not
-# across toolchains. The per-loop scripts beside this one call it.
+# across toolchains. The per-loop scripts beside this one call it. FEATURES=... builds the driver with
+# those cargo features; SIM=1 adds callgrind's cache and branch simulation (its model of this CPU's
+# caches, read from cpuid, with no prefetcher) and prints D1 misses and mispredicted branches per unit.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(dirname "$here")"
@@ -16,7 +18,9 @@ for tool in valgrind callgrind_annotate; do
     }
 done
 cd "$root"
-cargo build --profile profiling --example hot_loops --quiet
+cargo build --profile profiling --example hot_loops --quiet ${FEATURES:+--features "$FEATURES"}
+sim=()
+[ "${SIM:-0}" = 1 ] && sim=(--cache-sim=yes --branch-sim=yes)
 bin="$root/target/profiling/examples/hot_loops"
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
@@ -26,15 +30,23 @@ registry="${CARGO_HOME:-$HOME/.cargo}/registry/src/"
     echo "# $(rustc --version), $(valgrind --version), whitted $(git describe --always --dirty 2>/dev/null || echo unknown)"
     for loop in "$@"; do
         valgrind --tool=callgrind --callgrind-out-file="$tmp/$loop.out" --toggle-collect='*measured_*' \
-            "$bin" "$loop" >"$tmp/$loop.count" 2>"$tmp/$loop.log" || {
+            "${sim[@]}" "$bin" "$loop" >"$tmp/$loop.count" 2>"$tmp/$loop.log" || {
             cat "$tmp/$loop.log" >&2
             exit 1
         }
         read -r unit n <"$tmp/$loop.count"
-        callgrind_annotate --threshold=100 "$tmp/$loop.out" >"$tmp/$loop.txt" 2>/dev/null
+        callgrind_annotate --threshold=100 --show=Ir "$tmp/$loop.out" >"$tmp/$loop.txt" 2>/dev/null
         total=$(awk '/PROGRAM TOTALS/ { gsub(",", "", $1); print $1 }' "$tmp/$loop.txt")
         echo
         echo "## $loop: $n $unit, $total instructions, $((total / n)) per ${unit%s}"
+        if [ "${#sim[@]}" -gt 0 ]; then
+            # The simulated events' totals, in the order of callgrind's `events:` line.
+            callgrind_annotate --threshold=100 "$tmp/$loop.out" 2>/dev/null | awk -v n="$n" -v unit="${unit%s}" '
+                /^Ir / { for (i = 1; i <= NF; i++) name[i] = $i }
+                /PROGRAM TOTALS/ { k = 0; for (i = 1; i <= NF; i++) if ($i ~ /^[0-9,]+$/) { v = $i; gsub(",", "", v); val[name[++k]] = v }
+                    printf "simulated, per %s: %.2f D1 read misses, %.2f LL read misses, %.2f of %.1f conditional branches mispredicted\n",
+                        unit, val["D1mr"] / n, val["DLmr"] / n, val["Bcm"] / n, val["Bc"] / n }'
+        fi
         # callgrind_annotate's lines ("count (share) file:function [object]"), paths made short.
         sed -n '/file:function/,$p' "$tmp/$loop.txt" | sed -e '1,2d' -e '/^$/d' -e '/^-----/,$d' \
             -e "s|$registry[^/]*/||g" -e "s|$root/||g" -e 's|/rustc/[0-9a-f]*/library/|std/|g' \

@@ -5,7 +5,7 @@
 //!
 //! The workload: the 202,520-triangle dragon (`scenes/models/dragon_vrip_res2.ply.gz`) with the
 //! benchmark's camera and light (`docs/dragon-workload.md`) at 320x180, traced by the BVH4 (and
-//! by the BVH8 for the `-bvh8` loops);
+//! by the BVH8 for the `-bvh8` loops, by Embree 3 for the `-embree` ones);
 //! the shading loop renders the course's `scenes/dragon.p3f` at 320x180, Whitted, 1 sample per pixel, on
 //! one thread.
 //!
@@ -26,7 +26,8 @@ use whitted::render::{Options, RayCounts, Renderer};
 use whitted::scene::Scene;
 
 const LOOPS: &str = "closest-primary, closest-diffuse, any-shadow, packet-primary, packet-shadow, \
-                     build-sah, shade, frame, and closest-primary-bvh8, closest-diffuse-bvh8, any-shadow-bvh8";
+                     build-sah, shade, frame, closest-primary-bvh8, closest-diffuse-bvh8, any-shadow-bvh8, and \
+                     with the `embree` feature closest-primary-embree, closest-diffuse-embree, any-shadow-embree";
 const WIDTH: u32 = 320;
 const HEIGHT: u32 = 180;
 
@@ -140,6 +141,19 @@ fn run(name: &str) -> Result<(), String> {
         return Err("the dragon did not get a BVH4".into());
     };
     let w = whitted::kit::workload::generate(&scene, &accel, 1);
+    #[cfg(feature = "embree")]
+    if let Some(base) = name.strip_suffix("-embree") {
+        // Embree 3 on the same rays, for its instruction count beside ours (valgrind's CPU model has
+        // AVX2 and no AVX-512, so Embree dispatches to its AVX2 kernels, as ours do).
+        let embree = Accel::build(prims, AccelKind::Embree);
+        eprintln!("{}", embree.describe());
+        let closest = |r: &Ray, h: &mut Hit| embree.intersect(r, 0.0, h);
+        let any = |r: &Ray, h: &mut Hit| embree.occluded(r, 0.0, h.t);
+        let Some(counts) = single_rays(base, &w, closest, any) else {
+            return Err(format!("unknown loop \"{name}\": expected one of {LOOPS}"));
+        };
+        return report(name, counts);
+    }
     if let Some(base) = name.strip_suffix("-bvh8") {
         // The BVH8 on the best slab test this CPU (or valgrind's model of it) has.
         let accel8 = Accel::build(prims, AccelKind::Bvh8);
