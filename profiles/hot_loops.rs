@@ -16,12 +16,12 @@ use std::hint::black_box;
 use std::path::Path;
 use std::process::ExitCode;
 
-use whitted::accel::PACKET;
 use whitted::accel::bvh2::{Builder, Bvh2};
 use whitted::accel::policy::{AnyHit, Closest};
 use whitted::accel::wide::Bvh4;
 use whitted::accel::{Accel, AccelKind, Hit, Prims};
 use whitted::geometry::ray::Ray;
+use whitted::kit::workload::{Workload, generate, packets_of};
 use whitted::render::{Options, RayCounts, Renderer};
 use whitted::scene::Scene;
 
@@ -53,28 +53,17 @@ fn measured_any(trace: impl Fn(&Ray, &mut Hit) -> bool, rays: &[(Ray, f32)]) -> 
     hits
 }
 
-/// Consecutive rays in packets of [`PACKET`], as the renderer's tiles and the kernels bench form them,
-/// through the accelerator's packet verbs.
+/// Consecutive rays in packets of eight, as the renderer's tiles and the kernels bench form them
+/// (`kit::workload::packets_of`), through the accelerator's packet verbs.
 #[inline(never)]
 fn measured_packets<const ANY: bool>(accel: &Accel, rays: &[(Ray, f32)]) -> usize {
-    let mut found = 0;
-    for chunk in rays.chunks(PACKET) {
-        let mut r = [chunk[0].0; PACKET];
-        let mut t_max = [0.0; PACKET];
-        for (k, (ray, t)) in chunk.iter().enumerate() {
-            (r[k], t_max[k]) = (*ray, *t);
+    packets_of(rays, |r, active, t_max| match ANY {
+        true => accel.occluded_packet(r, active, 0.0, t_max),
+        false => {
+            let mut hits = t_max.map(Hit::miss);
+            accel.intersect_packet(r, active, 0.0, &mut hits)
         }
-        let active = (1u16 << chunk.len()).wrapping_sub(1) as u8;
-        found += match ANY {
-            true => accel.occluded_packet(&r, active, 0.0, &t_max),
-            false => {
-                let mut hits = t_max.map(Hit::miss);
-                accel.intersect_packet(&r, active, 0.0, &mut hits)
-            }
-        }
-        .count_ones() as usize;
-    }
-    found
+    })
 }
 
 #[inline(never)]
@@ -140,7 +129,7 @@ fn run(name: &str) -> Result<(), String> {
     let Accel::Bvh4(bvh) = &accel else {
         return Err("the dragon did not get a BVH4".into());
     };
-    let w = whitted::kit::workload::generate(&scene, &accel, 1);
+    let w = generate(&scene, &accel, 1);
     #[cfg(feature = "embree")]
     if let Some(base) = name.strip_suffix("-embree") {
         // Embree 3 on the same rays, for its instruction count beside ours (valgrind's CPU model has
@@ -149,10 +138,7 @@ fn run(name: &str) -> Result<(), String> {
         eprintln!("{}", embree.describe());
         let closest = |r: &Ray, h: &mut Hit| embree.intersect(r, 0.0, h);
         let any = |r: &Ray, h: &mut Hit| embree.occluded(r, 0.0, h.t);
-        let Some(counts) = single_rays(base, &w, closest, any) else {
-            return Err(format!("unknown loop \"{name}\": expected one of {LOOPS}"));
-        };
-        return report(name, counts);
+        return report(name, single_rays(name, base, &w, closest, any)?);
     }
     if let Some(base) = name.strip_suffix("-bvh8") {
         // The BVH8 on the best slab test this CPU (or valgrind's model of it) has.
@@ -163,10 +149,7 @@ fn run(name: &str) -> Result<(), String> {
         eprintln!("bvh8 slab tests: {:?}", bvh8.simd());
         let closest = |r: &Ray, h: &mut Hit| bvh8.traverse::<Closest>(r, 0.0, h);
         let any = |r: &Ray, h: &mut Hit| bvh8.traverse::<AnyHit>(r, 0.0, h);
-        let Some(counts) = single_rays(base, &w, closest, any) else {
-            return Err(format!("unknown loop \"{name}\": expected one of {LOOPS}"));
-        };
-        return report(name, counts);
+        return report(name, single_rays(name, base, &w, closest, any)?);
     }
     let closest = |r: &Ray, h: &mut Hit| bvh.traverse::<Closest>(r, 0.0, h);
     let any = |r: &Ray, h: &mut Hit| bvh.traverse::<AnyHit>(r, 0.0, h);
@@ -177,27 +160,25 @@ fn run(name: &str) -> Result<(), String> {
             measured_packets::<false>(&accel, &unbounded(&w.primary)),
         ),
         "packet-shadow" => (w.shadow.len(), measured_packets::<true>(&accel, &w.shadow)),
-        _ => match single_rays(name, &w, closest, any) {
-            Some(counts) => counts,
-            None => return Err(format!("unknown loop \"{name}\": expected one of {LOOPS}")),
-        },
+        _ => single_rays(name, name, &w, closest, any)?,
     };
     report(name, counts)
 }
 
-/// The single-ray loop `name` over the workload `w` with a structure's closest- and any-hit kernels:
-/// `(rays, hits)`, or `None` for a name that is not one.
+/// The single-ray loop `base` (the loop `name` less its structure's suffix) over the workload `w` with a
+/// structure's closest- and any-hit kernels: `(rays, hits)`, or the error for a name that is not one.
 fn single_rays(
     name: &str,
-    w: &whitted::kit::workload::Workload,
+    base: &str,
+    w: &Workload,
     closest: impl Fn(&Ray, &mut Hit) -> bool,
     any: impl Fn(&Ray, &mut Hit) -> bool,
-) -> Option<(usize, usize)> {
-    Some(match name {
+) -> Result<(usize, usize), String> {
+    Ok(match base {
         "closest-primary" => (w.primary.len(), measured_closest(closest, &w.primary)),
         "closest-diffuse" => (w.diffuse.len(), measured_closest(closest, &w.diffuse)),
         "any-shadow" => (w.shadow.len(), measured_any(any, &w.shadow)),
-        _ => return None,
+        _ => return Err(format!("unknown loop \"{name}\": expected one of {LOOPS}")),
     })
 }
 

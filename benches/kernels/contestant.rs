@@ -1,9 +1,10 @@
 //! What every row of the bench is: something that traces the bench's rays, ours or a peer's, one ray at
 //! a time or in packets. The bench is one loop over these, the ray sets and the thread counts.
 
-use whitted::accel::{Accel, Hit, PACKET};
+use whitted::accel::{Accel, Hit};
 use whitted::geometry::ray::Ray;
 use whitted::kit::contestants::Contestant as Built;
+use whitted::kit::workload::packets_of;
 
 /// A ray and the end of the interval searched (∞ for whole rays): every ray set is given as segments.
 pub type Segment = (Ray, f32);
@@ -115,21 +116,4 @@ impl Contestant for Ours<'_> {
             .filter(|(ray, t_max)| self.accel.occluded(ray, 0.0, *t_max))
             .count()
     }
-}
-
-/// The segments eight at a time: each packet's rays, limits and mask, passed to `trace`; the sum of
-/// the masks' bits it returns.
-#[inline(always)]
-pub fn packets_of(rays: &[Segment], trace: impl Fn(&[Ray; PACKET], u8, &[f32; PACKET]) -> u8) -> usize {
-    let mut found = 0;
-    for chunk in rays.chunks(PACKET) {
-        let mut r = [chunk[0].0; PACKET];
-        let mut t = [0.0; PACKET];
-        for (k, (ray, t_max)) in chunk.iter().enumerate() {
-            (r[k], t[k]) = (*ray, *t_max);
-        }
-        let active = (1u16 << chunk.len()).wrapping_sub(1) as u8;
-        found += trace(&r, active, &t).count_ones() as usize;
-    }
-    found
 }

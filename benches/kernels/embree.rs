@@ -5,8 +5,9 @@
 
 use whitted::accel::embree::Embree as Scene;
 use whitted::accel::{Hit, PrimKind};
+use whitted::kit::workload::packets_of;
 
-use crate::contestant::{Contestant, FirstHit, Segment, Side, packets_of};
+use crate::contestant::{Contestant, FirstHit, Segment, Side};
 
 /// The triangle a segment hits first by Embree's test (`rtcIntersect1`), if any.
 struct First<'a>(&'a Scene<'a>);

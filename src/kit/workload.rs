@@ -7,7 +7,7 @@ use glam::Vec3;
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
-use crate::accel::{Accel, Hit, Prims};
+use crate::accel::{Accel, Hit, PACKET, Prims};
 use crate::geometry::ray::Ray;
 use crate::render::camera::RayCamera;
 use crate::scene::Scene;
@@ -28,6 +28,27 @@ pub struct Workload {
     pub primary_hits: usize,
     /// Σ t over the primary hits (the workload document's checksum).
     pub sum_t: f64,
+}
+
+/// Segments (rays with their `t_max`) eight at a time, in order, as the renderer's tiles and the kernels
+/// bench form packets: each packet's rays, limits and active mask (a short last packet's spare lanes
+/// repeat its first ray, inactive) passed to `trace`; the sum of the bits of the masks it returns.
+#[inline(always)]
+pub fn packets_of(
+    segments: &[(Ray, f32)],
+    trace: impl Fn(&[Ray; PACKET], u8, &[f32; PACKET]) -> u8,
+) -> usize {
+    let mut found = 0;
+    for chunk in segments.chunks(PACKET) {
+        let mut r = [chunk[0].0; PACKET];
+        let mut t = [0.0; PACKET];
+        for (k, (ray, t_max)) in chunk.iter().enumerate() {
+            (r[k], t[k]) = (*ray, *t_max);
+        }
+        let active = (1u16 << chunk.len()).wrapping_sub(1) as u8;
+        found += trace(&r, active, &t).count_ones() as usize;
+    }
+    found
 }
 
 /// Builds the workload for `scene` at its resolution, using `accel` to find the primary hits; the
