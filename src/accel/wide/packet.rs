@@ -164,6 +164,7 @@ impl<P: HitPolicy, const W: usize> OnLanes8 for Packet<'_, '_, P, W> {
                     let (entry, entered) = slab(&p, plane, lo, t_max);
                     let entered = entered & mask;
                     if entered != 0 {
+                        bvh.prefetch(node.child[c]);
                         stack.push(Entry {
                             node: node.child[c],
                             mask: entered as u8,

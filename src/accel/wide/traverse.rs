@@ -138,6 +138,7 @@ impl<const W: usize> WideBvh<'_, W> {
                         while mask != 0 {
                             let k = mask.trailing_zeros() as usize;
                             mask &= mask - 1;
+                            self.prefetch(node.child[k]);
                             stack.push((node.child[k], t[k]));
                         }
                         current = node.child[first];
@@ -153,6 +154,7 @@ impl<const W: usize> WideBvh<'_, W> {
                         } else {
                             (second, first)
                         };
+                        self.prefetch(node.child[far]);
                         stack.push((node.child[far], t[far]));
                         current = node.child[near];
                         continue;
@@ -160,11 +162,14 @@ impl<const W: usize> WideBvh<'_, W> {
                     // Three or more: push them, order the run far to near, descend into the nearest
                     // (its entry was just tested against the hit so far).
                     let start = stack.len();
+                    self.prefetch(node.child[first]);
+                    self.prefetch(node.child[second]);
                     stack.push((node.child[first], t[first]));
                     stack.push((node.child[second], t[second]));
                     while mask != 0 {
                         let k = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
+                        self.prefetch(node.child[k]);
                         stack.push((node.child[k], t[k]));
                     }
                     sort_far_to_near(stack.above_mut(start), |e| e.1);
