@@ -22,7 +22,7 @@ pub use packet::{HitPacket, PACKET, RayPacket};
 pub use prims::{Hit, PrimKind, Prims, Surface};
 pub use wide::Simd;
 
-use crate::geometry::ray::Ray;
+use crate::geometry::ray::{Ray, ahead};
 use brute::Brute;
 use bvh2::{Builder, Bvh2};
 use grid::Grid;
@@ -224,8 +224,10 @@ impl<'a> Accel<'a> {
     }
 
     /// Finds the closest hit with `t` in `(t_min, hit.t)`; updates `hit` and returns true if there is one.
+    /// Every query of every accelerator searches ahead of the ray's origin: a negative `t_min` is 0.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        let t_min = ahead(t_min);
         match self {
             Accel::Brute(b) => b.traverse::<Closest>(ray, t_min, hit),
             Accel::Grid(g) => g.traverse::<Closest>(ray, t_min, hit),
@@ -240,7 +242,7 @@ impl<'a> Accel<'a> {
     /// True if anything is hit with `t` in `(t_min, t_max)`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
-        let mut hit = Hit::miss(t_max);
+        let (t_min, mut hit) = (ahead(t_min), Hit::miss(t_max));
         match self {
             #[cfg(feature = "embree")]
             Accel::Embree(e) => e.occluded(ray, t_min, t_max),
@@ -259,6 +261,7 @@ impl<'a> Accel<'a> {
     /// structures answer ray by ray.
     #[inline]
     pub fn intersect_packet(&self, rays: &RayPacket, active: u8, t_min: f32, hits: &mut HitPacket) -> u8 {
+        let t_min = ahead(t_min);
         match self {
             Accel::Bvh4(b) => b.traverse_packet::<Closest>(rays, active, t_min, hits),
             Accel::Bvh8(b) => b.traverse_packet::<Closest>(rays, active, t_min, hits),
@@ -272,7 +275,7 @@ impl<'a> Accel<'a> {
     /// [`Accel::occluded`] for each, as a packet where the structure has a packet kernel.
     #[inline]
     pub fn occluded_packet(&self, rays: &RayPacket, active: u8, t_min: f32, t_max: &[f32; PACKET]) -> u8 {
-        let mut hits = t_max.map(Hit::miss);
+        let (t_min, mut hits) = (ahead(t_min), t_max.map(Hit::miss));
         match self {
             Accel::Bvh4(b) => b.traverse_packet::<AnyHit>(rays, active, t_min, &mut hits),
             Accel::Bvh8(b) => b.traverse_packet::<AnyHit>(rays, active, t_min, &mut hits),

@@ -30,6 +30,14 @@ impl Ray {
     }
 }
 
+/// The start of a search along a ray as the accelerators take it: never behind the origin. A negative
+/// (or NaN) `t_min` is +0, not −0: the wide BVHs compare distances as the integers of their bits, where
+/// the search's start must be at least +0 (`accel::wide`'s slab test).
+#[inline]
+pub fn ahead(t_min: f32) -> f32 {
+    if t_min > 0.0 { t_min } else { 0.0 }
+}
+
 /// `1 / dir` with zero (and tiny) components replaced by ±1e-18 first, as Embree does: every slab
 /// product `(bound − origin) · inv` is then finite (an origin exactly on a slab plane gives 0, never the
 /// NaN of 0 · ∞), so hierarchy tests need no NaN handling in their inner loop. The price: a ray with a

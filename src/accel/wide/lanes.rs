@@ -6,10 +6,9 @@
 //! or for AVX-512 where the CPU has it: the same kernels, with the box test's compare written straight
 //! into a mask register). The single-ray kernel
 //! puts a node's children in the lanes (one ray against `W` boxes); the packet kernel puts eight rays in
-//! them (eight rays against one box). Both call [`slab`], the same operations in the same order on every
-//! lane type (`max(near, x)` and `min(far, x)` with the running value first, as `maxps`/`minps` order
-//! their operands, and an ordered `<=` for the mask), so every path enters exactly the same boxes and the
-//! images do not depend on the CPU.
+//! them (eight rays against one box). Both call [`slab`], the same operations on every lane type (its
+//! distances' maximum, minimum and compare on the integers of their bits, exact on any instruction
+//! set), so every path enters exactly the same boxes and the images do not depend on the CPU.
 //!
 //! AVX2 and AVX-512 code is reached only through [`Isa::run8`], and an [`Isa`] that selects either is
 //! made only by [`Isa::new`] after the CPU was asked: the [`Avx8`] lane type is private to this file,
@@ -19,7 +18,8 @@
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
-use wide::{f32x4, f32x8};
+use wide::bytemuck::cast;
+use wide::{f32x4, f32x8, i32x4, i32x8};
 
 use crate::geometry::ray::{Ray, SLAB_ROBUST, safe_inverse};
 
@@ -31,10 +31,6 @@ pub(super) trait Lanes<const N: usize>: Copy {
     fn load(a: &[f32; N]) -> Self;
     /// The lanes as an array.
     fn to_array(self) -> [f32; N];
-    /// Lane-wise minimum (`self` is the first operand).
-    fn min(self, o: Self) -> Self;
-    /// Lane-wise maximum (`self` is the first operand).
-    fn max(self, o: Self) -> Self;
     /// Lane-wise difference.
     fn sub(self, o: Self) -> Self;
     /// Lane-wise product.
@@ -55,6 +51,16 @@ pub(super) trait Lanes<const N: usize>: Copy {
     fn ge(self, o: Self) -> u32;
     /// The bit mask of the lanes where `self != o` (unordered: true on NaN, as SSE's `cmpneqps`).
     fn ne(self, o: Self) -> u32;
+    /// Lane-wise maximum of the lanes' bits read as `i32` (Embree's `maxi`): the float order where both
+    /// lanes are at least +0, and a lane that is negative (or −0) below every such lane. The slab test
+    /// uses it on distances, where it costs an integer instruction's latency instead of a float one's.
+    fn max_bits(self, o: Self) -> Self;
+    /// Lane-wise minimum of the lanes' bits read as `i32` (see [`Lanes::max_bits`]).
+    fn min_bits(self, o: Self) -> Self;
+    /// The bit mask of the lanes where `self <= o`, their bits read as `i32` (see [`Lanes::max_bits`]).
+    fn le_bits(self, o: Self) -> u32;
+    /// Per lane, `if_set`'s where `self`'s lane is all ones, `if_clear`'s where it is all zeros.
+    fn select(self, if_set: Self, if_clear: Self) -> Self;
 }
 
 /// Eight lanes that can be filled from two halves of four: two four-triangle leaf blocks side by side
@@ -78,7 +84,7 @@ impl Lanes8 for f32x8 {
 
 /// [`Lanes`] over `wide`'s types, written once for both widths.
 macro_rules! wide_lanes {
-    ($v:ty, $n:literal) => {
+    ($v:ty, $i:ty, $n:literal) => {
         impl Lanes<$n> for $v {
             #[inline(always)]
             fn splat(v: f32) -> Self {
@@ -91,14 +97,6 @@ macro_rules! wide_lanes {
             #[inline(always)]
             fn to_array(self) -> [f32; $n] {
                 <$v>::to_array(self)
-            }
-            #[inline(always)]
-            fn min(self, o: Self) -> Self {
-                self.fast_min(o)
-            }
-            #[inline(always)]
-            fn max(self, o: Self) -> Self {
-                self.fast_max(o)
             }
             #[inline(always)]
             fn sub(self, o: Self) -> Self {
@@ -140,12 +138,29 @@ macro_rules! wide_lanes {
             fn ne(self, o: Self) -> u32 {
                 self.simd_ne(o).to_bitmask()
             }
+            #[inline(always)]
+            fn max_bits(self, o: Self) -> Self {
+                cast::<$i, $v>(cast::<$v, $i>(self).max(cast(o)))
+            }
+            #[inline(always)]
+            fn min_bits(self, o: Self) -> Self {
+                cast::<$i, $v>(cast::<$v, $i>(self).min(cast(o)))
+            }
+            #[inline(always)]
+            fn le_bits(self, o: Self) -> u32 {
+                let gt = cast::<$v, $i>(self).simd_gt(cast::<$v, $i>(o));
+                !cast::<$i, $v>(gt).to_bitmask() & ((1 << $n) - 1)
+            }
+            #[inline(always)]
+            fn select(self, if_set: Self, if_clear: Self) -> Self {
+                <$v>::select(self, if_set, if_clear)
+            }
         }
     };
 }
 
-wide_lanes!(f32x4, 4);
-wide_lanes!(f32x8, 8);
+wide_lanes!(f32x4, i32x4, 4);
+wide_lanes!(f32x8, i32x8, 8);
 
 /// Eight lanes in one 256-bit register. Values of this type exist only inside [`run_avx2`] (`MASK`
 /// false) and [`run_avx512`] (`MASK` true), which run only on CPUs with those instructions (a
@@ -186,14 +201,6 @@ impl<const MASK: bool> Lanes<8> for Avx8<MASK> {
         out
     }
     #[inline(always)]
-    fn min(self, o: Self) -> Self {
-        Avx8(avx!(_mm256_min_ps(self.0, o.0)))
-    }
-    #[inline(always)]
-    fn max(self, o: Self) -> Self {
-        Avx8(avx!(_mm256_max_ps(self.0, o.0)))
-    }
-    #[inline(always)]
     fn sub(self, o: Self) -> Self {
         Avx8(avx!(_mm256_sub_ps(self.0, o.0)))
     }
@@ -232,6 +239,34 @@ impl<const MASK: bool> Lanes<8> for Avx8<MASK> {
     #[inline(always)]
     fn ne(self, o: Self) -> u32 {
         self.cmp::<_CMP_NEQ_UQ>(o)
+    }
+    #[inline(always)]
+    fn max_bits(self, o: Self) -> Self {
+        Avx8(avx!(_mm256_castsi256_ps(_mm256_max_epi32(
+            _mm256_castps_si256(self.0),
+            _mm256_castps_si256(o.0)
+        ))))
+    }
+    #[inline(always)]
+    fn min_bits(self, o: Self) -> Self {
+        Avx8(avx!(_mm256_castsi256_ps(_mm256_min_epi32(
+            _mm256_castps_si256(self.0),
+            _mm256_castps_si256(o.0)
+        ))))
+    }
+    #[inline(always)]
+    fn le_bits(self, o: Self) -> u32 {
+        let (a, b) = avx!((_mm256_castps_si256(self.0), _mm256_castps_si256(o.0)));
+        if MASK {
+            u32::from(avx!(_mm256_cmple_epi32_mask(a, b)))
+        } else {
+            let gt = avx!(_mm256_castsi256_ps(_mm256_cmpgt_epi32(a, b)));
+            !(avx!(_mm256_movemask_ps(gt)) as u32) & 0xff
+        }
+    }
+    #[inline(always)]
+    fn select(self, if_set: Self, if_clear: Self) -> Self {
+        Avx8(avx!(_mm256_blendv_ps(if_clear.0, if_set.0, self.0)))
     }
 }
 
@@ -381,14 +416,17 @@ fn run_avx512<K: OnLanes8>(k: K) -> K::Output {
 }
 
 /// Rays prepared for slab tests (Kay and Kajiya 1986): per axis their origins and (Embree's
-/// [`safe_inverse`]) inverse directions in lanes, splatted for one ray or side by side for a packet, and
-/// per axis whether the max plane is the near one (Embree's near/far plane selection, once per ray or
-/// packet rather than a min/max per box). When a packet's rays disagree in a sign (`mixed`), each lane
-/// orders its two planes by min/max instead, which gives the same planes for any box that is not
-/// inverted.
+/// [`safe_inverse`]) inverse directions in lanes, splatted for one ray or side by side for a packet, the
+/// inverse directions again scaled by [`SLAB_ROBUST`] for the exit planes, and per axis whether the max
+/// plane is the near one (Embree's near/far plane selection, once per ray or packet rather than a min/max
+/// per box). When a packet's rays disagree in a sign (`mixed`), each lane picks its own planes by its
+/// own sign (`negative`: all ones in the lanes whose inverse direction is negative), so that every lane
+/// computes what the single-ray test computes for its ray.
 pub(super) struct SlabRays<V> {
     origin: [V; 3],
     inv: [V; 3],
+    inv_far: [V; 3],
+    negative: [V; 3],
     flip: [bool; 3],
     mixed: bool,
 }
@@ -404,6 +442,8 @@ impl<V> SlabRays<V> {
         SlabRays {
             origin: ray.origin.to_array().map(V::splat),
             inv: inv.to_array().map(V::splat),
+            inv_far: (inv * SLAB_ROBUST).to_array().map(V::splat),
+            negative: [V::splat(0.0); 3],
             flip: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
             mixed: false,
         }
@@ -417,12 +457,20 @@ impl<V> SlabRays<V> {
     {
         // Plain loops and explicit arrays: `map` and `from_fn` closures over arrays were left out of
         // line here, outside the AVX2 compile (callgrind).
-        let (mut origin, mut inv, mut negative) = ([[0.0f32; 8]; 3], [[0.0f32; 8]; 3], [0u32; 3]);
+        let (mut origin, mut inv, mut inv_far, mut lanes, mut negative) = (
+            [[0.0f32; 8]; 3],
+            [[0.0f32; 8]; 3],
+            [[0.0f32; 8]; 3],
+            [[0.0f32; 8]; 3],
+            [0u32; 3],
+        );
         for (k, r) in rays.iter().enumerate() {
             let i = safe_inverse(r.dir);
             for a in 0..3 {
                 origin[a][k] = r.origin[a];
                 inv[a][k] = i[a];
+                inv_far[a][k] = i[a] * SLAB_ROBUST;
+                lanes[a][k] = f32::from_bits(if i[a] < 0.0 { u32::MAX } else { 0 });
                 negative[a] |= u32::from(i[a] < 0.0) << k;
             }
         }
@@ -430,6 +478,8 @@ impl<V> SlabRays<V> {
         SlabRays {
             origin: [V::load(&origin[0]), V::load(&origin[1]), V::load(&origin[2])],
             inv: [V::load(&inv[0]), V::load(&inv[1]), V::load(&inv[2])],
+            inv_far: [V::load(&inv_far[0]), V::load(&inv_far[1]), V::load(&inv_far[2])],
+            negative: [V::load(&lanes[0]), V::load(&lanes[1]), V::load(&lanes[2])],
             flip: [negative[0] != 0, negative[1] != 0, negative[2] != 0],
             mixed: negative.iter().any(|&m| m != 0 && m != live),
         }
@@ -437,10 +487,18 @@ impl<V> SlabRays<V> {
 }
 
 /// The slab test: each lane's entry distance into its box and the mask of lanes whose ray enters it
-/// within `[t_min, t_max]`. `plane(axis, max)` gives the boxes' min or max planes on `axis` in lanes (a
-/// node's children side by side, or one child splatted). The exit distance is scaled by
-/// [`SLAB_ROBUST`] so that rounding never rejects a primitive touching the box. An empty slot's inverted
-/// box gives near = +∞ > far = −∞ whichever plane is near.
+/// within `[t_min, t_max]`, for `t_min >= +0`. `plane(axis, max)` gives the boxes' min or max planes on
+/// `axis` in lanes (a node's children side by side, or one child splatted).
+///
+/// The exit planes' distances are taken with the inverse direction scaled by [`SLAB_ROBUST`] (Ize 2013,
+/// "Robust BVH Ray Traversal", rounds the reciprocal up in the same way), so that rounding never rejects
+/// a primitive touching the box; the scale is then off the path from a node's load to its mask. The
+/// distances are compared as the integers of their bits (Embree's `maxi`/`mini`): with the `t_min` lane
+/// at least +0, the entry is the float maximum and a negative exit (the box behind the ray) stays below
+/// it, while each step is a one-cycle integer instruction where `maxps` and `cmpps` take four (a single
+/// ray's traversal is a chain of such steps, node to child). The one difference from float compares is
+/// −0, which counts as negative: a box left exactly at the origin is not entered; it holds no point at
+/// `t > t_min`. An empty slot's inverted box gives an entry of +∞ above any exit.
 #[inline(always)]
 pub(super) fn slab<const N: usize, V: Lanes<N>>(
     rays: &SlabRays<V>,
@@ -448,20 +506,20 @@ pub(super) fn slab<const N: usize, V: Lanes<N>>(
     t_min: V,
     t_max: V,
 ) -> (V, u32) {
-    let mut near = t_min;
-    let mut far = V::splat(f32::INFINITY);
+    let (mut near, mut far) = ([t_min; 3], [t_max; 3]);
     for axis in 0..3 {
         let flip = rays.flip[axis];
-        let t0 = plane(axis, flip).sub(rays.origin[axis]).mul(rays.inv[axis]);
-        let t1 = plane(axis, !flip).sub(rays.origin[axis]).mul(rays.inv[axis]);
-        if rays.mixed {
-            near = near.max(t0.min(t1));
-            far = far.min(t0.max(t1));
+        let (entry, exit) = if rays.mixed {
+            let (lo, hi, neg) = (plane(axis, false), plane(axis, true), rays.negative[axis]);
+            (neg.select(hi, lo), neg.select(lo, hi))
         } else {
-            near = near.max(t0);
-            far = far.min(t1);
-        }
+            (plane(axis, flip), plane(axis, !flip))
+        };
+        near[axis] = entry.sub(rays.origin[axis]).mul(rays.inv[axis]);
+        far[axis] = exit.sub(rays.origin[axis]).mul(rays.inv_far[axis]);
     }
-    let far = far.mul(V::splat(SLAB_ROBUST)).min(t_max);
-    (near, near.le(far))
+    // Two levels of pairs rather than a chain of four: the chain's latency is the traversal's.
+    let near = near[0].max_bits(near[1]).max_bits(near[2].max_bits(t_min));
+    let far = far[0].min_bits(far[1]).min_bits(far[2].min_bits(t_max));
+    (near, near.le_bits(far))
 }

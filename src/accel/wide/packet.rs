@@ -38,7 +38,7 @@ use super::{ChildRef, EMPTY, LEAF, STACK, WideBvh};
 use crate::accel::packet::{HitPacket, PACKET, RayPacket, bits};
 use crate::accel::policy::HitPolicy;
 use crate::accel::stack::Stack;
-use crate::geometry::ray::CULL_MARGIN;
+use crate::geometry::ray::{CULL_MARGIN, ahead};
 
 /// A stack entry: a child, the mask of the rays that entered it, their entry distances, and the entry
 /// of the first of them (the key that orders a node's children).
@@ -106,6 +106,7 @@ impl<P: HitPolicy, const W: usize> OnLanes8 for Packet<'_, '_, P, W> {
             hits,
             ..
         } = self;
+        let t_min = ahead(t_min);
         // The planes first, ray by ray, as the single-ray kernel does.
         let mut found = 0u32;
         for k in bits(active) {

@@ -17,7 +17,7 @@ use super::{Bvh4, Bvh8, ChildRef, EMPTY, LEAF, STACK, TRIANGLES, WideBvh, leaf_p
 use crate::accel::policy::HitPolicy;
 use crate::accel::prims::Hit;
 use crate::accel::stack::Stack;
-use crate::geometry::ray::{CULL_MARGIN, Ray};
+use crate::geometry::ray::{CULL_MARGIN, Ray, ahead};
 
 impl Bvh4<'_> {
     /// The closest (or, with [`crate::accel::policy::AnyHit`], any) hit with `t` in `(t_min, hit.t)`.
@@ -108,6 +108,7 @@ impl<const W: usize> WideBvh<'_, W> {
     /// The one single-ray traversal, for both policies, every width and every lane type.
     #[inline(always)]
     fn single<P: HitPolicy, L: Lanes<W>, T: Lanes8>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        let t_min = ahead(t_min);
         let mut found = self.prims.intersect_planes::<P>(ray, t_min, hit);
         if (P::ANY && found) || self.root == EMPTY {
             return found;
