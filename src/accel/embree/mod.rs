@@ -42,7 +42,7 @@ use super::packet::{HitPacket, PACKET, RayPacket, bits};
 use super::policy::{AnyHit, Closest};
 use super::prims::{Hit, PrimKind, Prims};
 use crate::error::{Error, Result};
-use crate::geometry::ray::Ray;
+use crate::geometry::ray::{Ray, ahead};
 
 /// Embree's geometry id of the triangles.
 const TRIANGLES: u32 = 0;
@@ -497,7 +497,7 @@ fn holds_any(t_min: f32, t_max: f32) -> bool {
 fn ray1(ray: &Ray, t_min: f32, t_max: f32) -> ffi::Ray1 {
     ffi::Ray1 {
         org: ray.origin.to_array(),
-        tnear: t_min.max(0.0),
+        tnear: ahead(t_min),
         dir: ray.dir.to_array(),
         time: 0.0,
         tfar: t_max.next_down(),
@@ -514,7 +514,7 @@ fn lane(r: &mut ffi::Ray8, k: usize, ray: &Ray, t_min: f32, t_max: f32) {
         r.org[a][k] = ray.origin[a];
         r.dir[a][k] = ray.dir[a];
     }
-    (r.tnear[k], r.tfar[k], r.mask[k]) = (t_min.max(0.0), t_max.next_down(), u32::MAX);
+    (r.tnear[k], r.tfar[k], r.mask[k]) = (ahead(t_min), t_max.next_down(), u32::MAX);
 }
 
 /// The user geometry's bounds callback: [`Prims::bounds`] of the primitive.

@@ -457,7 +457,7 @@ impl<V> SlabRays<V> {
     {
         // Plain loops and explicit arrays: `map` and `from_fn` closures over arrays were left out of
         // line here, outside the AVX2 compile (callgrind).
-        let (mut origin, mut inv, mut inv_far, mut lanes, mut negative) = (
+        let (mut origin, mut inv, mut inv_far, mut sign_mask, mut negative) = (
             [[0.0f32; 8]; 3],
             [[0.0f32; 8]; 3],
             [[0.0f32; 8]; 3],
@@ -470,7 +470,7 @@ impl<V> SlabRays<V> {
                 origin[a][k] = r.origin[a];
                 inv[a][k] = i[a];
                 inv_far[a][k] = i[a] * SLAB_ROBUST;
-                lanes[a][k] = f32::from_bits(if i[a] < 0.0 { u32::MAX } else { 0 });
+                sign_mask[a][k] = f32::from_bits(if i[a] < 0.0 { u32::MAX } else { 0 });
                 negative[a] |= u32::from(i[a] < 0.0) << k;
             }
         }
@@ -479,7 +479,11 @@ impl<V> SlabRays<V> {
             origin: [V::load(&origin[0]), V::load(&origin[1]), V::load(&origin[2])],
             inv: [V::load(&inv[0]), V::load(&inv[1]), V::load(&inv[2])],
             inv_far: [V::load(&inv_far[0]), V::load(&inv_far[1]), V::load(&inv_far[2])],
-            negative: [V::load(&lanes[0]), V::load(&lanes[1]), V::load(&lanes[2])],
+            negative: [
+                V::load(&sign_mask[0]),
+                V::load(&sign_mask[1]),
+                V::load(&sign_mask[2]),
+            ],
             flip: [negative[0] != 0, negative[1] != 0, negative[2] != 0],
             mixed: negative.iter().any(|&m| m != 0 && m != live),
         }
