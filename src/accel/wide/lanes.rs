@@ -18,10 +18,16 @@
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
+use glam::Vec3;
 use wide::bytemuck::cast;
 use wide::{f32x4, f32x8, i32x4, i32x8};
 
 use crate::geometry::ray::{Ray, SLAB_ROBUST, safe_inverse};
+
+/// Relative outward move of a per-ray `origin · inv` for the fused slab test: 2⁻²², four times the
+/// largest relative error of a product rounded to nearest (2⁻²⁴), so that after the nudge's own rounding
+/// it still lies beyond the exact product.
+const NUDGE: f32 = 1.0 / (1 << 22) as f32;
 
 /// `N` floats in SIMD lanes: what the slab test and the packet kernel's bookkeeping need.
 pub(super) trait Lanes<const N: usize>: Copy {
@@ -61,6 +67,10 @@ pub(super) trait Lanes<const N: usize>: Copy {
     fn le_bits(self, o: Self) -> u32;
     /// Per lane, `if_set`'s where `self`'s lane is all ones, `if_clear`'s where it is all zeros.
     fn select(self, if_set: Self, if_clear: Self) -> Self;
+    /// Whether [`Lanes::mul_sub`] rounds once: a fused multiply-subtract in hardware (FMA).
+    const FUSED: bool;
+    /// `self * m - s`, rounded once where [`Lanes::FUSED`], else twice.
+    fn mul_sub(self, m: Self, s: Self) -> Self;
 }
 
 /// Eight lanes that can be filled from two halves of four: two four-triangle leaf blocks side by side
@@ -154,6 +164,12 @@ macro_rules! wide_lanes {
             #[inline(always)]
             fn select(self, if_set: Self, if_clear: Self) -> Self {
                 <$v>::select(self, if_set, if_clear)
+            }
+            // `wide` fuses where the whole build targets FMA (`-C target-cpu=native`).
+            const FUSED: bool = cfg!(target_feature = "fma");
+            #[inline(always)]
+            fn mul_sub(self, m: Self, s: Self) -> Self {
+                <$v>::mul_sub(self, m, s)
             }
         }
     };
@@ -267,6 +283,11 @@ impl<const MASK: bool> Lanes<8> for Avx8<MASK> {
     #[inline(always)]
     fn select(self, if_set: Self, if_clear: Self) -> Self {
         Avx8(avx!(_mm256_blendv_ps(if_clear.0, if_set.0, self.0)))
+    }
+    const FUSED: bool = true;
+    #[inline(always)]
+    fn mul_sub(self, m: Self, s: Self) -> Self {
+        Avx8(avx!(_mm256_fmsub_ps(self.0, m.0, s.0)))
     }
 }
 
@@ -417,7 +438,8 @@ fn run_avx512<K: OnLanes8>(k: K) -> K::Output {
 
 /// Rays prepared for slab tests (Kay and Kajiya 1986): per axis their origins and (Embree's
 /// [`safe_inverse`]) inverse directions in lanes, splatted for one ray or side by side for a packet, the
-/// inverse directions again scaled by [`SLAB_ROBUST`] for the exit planes, and per axis whether the max
+/// inverse directions again scaled by [`SLAB_ROBUST`] for the exit planes, the products of origin and
+/// inverse for [`slab`]'s fused form (rounded outward: see there), and per axis whether the max
 /// plane is the near one (Embree's near/far plane selection, once per ray or packet rather than a min/max
 /// per box). When a packet's rays disagree in a sign (`mixed`), each lane picks its own planes by its
 /// own sign (`negative`: all ones in the lanes whose inverse direction is negative), so that every lane
@@ -426,6 +448,8 @@ pub(super) struct SlabRays<V> {
     origin: [V; 3],
     inv: [V; 3],
     inv_far: [V; 3],
+    org_inv: [V; 3],
+    org_inv_far: [V; 3],
     negative: [V; 3],
     flip: [bool; 3],
     mixed: bool,
@@ -439,10 +463,15 @@ impl<V> SlabRays<V> {
         V: Lanes<N>,
     {
         let inv = safe_inverse(ray.dir);
+        let inv_far = inv * SLAB_ROBUST;
+        let (oi, oif) = (ray.origin * inv, ray.origin * inv_far);
+        let lanes = |v: Vec3| [V::splat(v.x), V::splat(v.y), V::splat(v.z)];
         SlabRays {
-            origin: ray.origin.to_array().map(V::splat),
-            inv: inv.to_array().map(V::splat),
-            inv_far: (inv * SLAB_ROBUST).to_array().map(V::splat),
+            origin: lanes(ray.origin),
+            inv: lanes(inv),
+            inv_far: lanes(inv_far),
+            org_inv: lanes(oi + oi.abs() * NUDGE),
+            org_inv_far: lanes(oif - oif.abs() * NUDGE),
             negative: [V::splat(0.0); 3],
             flip: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
             mixed: false,
@@ -457,6 +486,7 @@ impl<V> SlabRays<V> {
     {
         // Plain loops and explicit arrays: `map` and `from_fn` closures over arrays were left out of
         // line here, outside the AVX2 compile (callgrind).
+        let (mut org_inv, mut org_inv_far) = ([[0.0f32; 8]; 3], [[0.0f32; 8]; 3]);
         let (mut origin, mut inv, mut inv_far, mut sign_mask, mut negative) = (
             [[0.0f32; 8]; 3],
             [[0.0f32; 8]; 3],
@@ -470,6 +500,9 @@ impl<V> SlabRays<V> {
                 origin[a][k] = r.origin[a];
                 inv[a][k] = i[a];
                 inv_far[a][k] = i[a] * SLAB_ROBUST;
+                let (oi, oif) = (r.origin[a] * i[a], r.origin[a] * inv_far[a][k]);
+                org_inv[a][k] = oi + oi.abs() * NUDGE;
+                org_inv_far[a][k] = oif - oif.abs() * NUDGE;
                 sign_mask[a][k] = f32::from_bits(if i[a] < 0.0 { u32::MAX } else { 0 });
                 negative[a] |= u32::from(i[a] < 0.0) << k;
             }
@@ -479,6 +512,12 @@ impl<V> SlabRays<V> {
             origin: [V::load(&origin[0]), V::load(&origin[1]), V::load(&origin[2])],
             inv: [V::load(&inv[0]), V::load(&inv[1]), V::load(&inv[2])],
             inv_far: [V::load(&inv_far[0]), V::load(&inv_far[1]), V::load(&inv_far[2])],
+            org_inv: [V::load(&org_inv[0]), V::load(&org_inv[1]), V::load(&org_inv[2])],
+            org_inv_far: [
+                V::load(&org_inv_far[0]),
+                V::load(&org_inv_far[1]),
+                V::load(&org_inv_far[2]),
+            ],
             negative: [
                 V::load(&sign_mask[0]),
                 V::load(&sign_mask[1]),
@@ -503,6 +542,17 @@ impl<V> SlabRays<V> {
 /// ray's traversal is a chain of such steps, node to child). The one difference from float compares is
 /// −0, which counts as negative: a box left exactly at the origin is not entered; it holds no point at
 /// `t > t_min`. An empty slot's inverted box gives an entry of +∞ above any exit.
+///
+/// Where the lanes have FMA ([`Lanes::FUSED`]) a distance is one fused `plane · inv − origin · inv`
+/// (Embree's `msub` with its `org_rdir`) instead of a subtract and a multiply: one step fewer on the
+/// chain from a node's load to its mask. `origin · inv` is rounded once per ray, so it is moved outward
+/// by [`NUDGE`] of itself (more than its rounding error), up for the entries and down for the exits
+/// (the box grows by about 2⁻²¹ of the origin's coordinates): what is left is each distance's own final
+/// rounding, relative to the distance, which the exits' [`SLAB_ROBUST`] covers as it covers the
+/// unfused form's. Lanes without FMA would round `plane · inv` too, an error relative to the plane,
+/// not to the distance, so they subtract first. The two forms can differ in the last bits of an entry
+/// distance, and so in the order of two children entered at the same distance; not in whether a box
+/// that holds a hit is entered.
 #[inline(always)]
 pub(super) fn slab<const N: usize, V: Lanes<N>>(
     rays: &SlabRays<V>,
@@ -519,11 +569,163 @@ pub(super) fn slab<const N: usize, V: Lanes<N>>(
         } else {
             (plane(axis, flip), plane(axis, !flip))
         };
-        near[axis] = entry.sub(rays.origin[axis]).mul(rays.inv[axis]);
-        far[axis] = exit.sub(rays.origin[axis]).mul(rays.inv_far[axis]);
+        if V::FUSED {
+            near[axis] = entry.mul_sub(rays.inv[axis], rays.org_inv[axis]);
+            far[axis] = exit.mul_sub(rays.inv_far[axis], rays.org_inv_far[axis]);
+        } else {
+            near[axis] = entry.sub(rays.origin[axis]).mul(rays.inv[axis]);
+            far[axis] = exit.sub(rays.origin[axis]).mul(rays.inv_far[axis]);
+        }
     }
     // Two levels of pairs rather than a chain of four: the chain's latency is the traversal's.
     let near = near[0].max_bits(near[1]).max_bits(near[2].max_bits(t_min));
     let far = far[0].min_bits(far[1]).min_bits(far[2].min_bits(t_max));
     (near, near.le_bits(far))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::ray::testing::TestRng;
+
+    /// [`slab`] over eight boxes on the lanes [`Isa::run8`] picks: entry distances and mask.
+    struct Slab8<'a> {
+        ray: &'a Ray,
+        boxes: &'a [[f32; 8]; 6],
+        t_max: f32,
+    }
+
+    impl OnLanes8 for Slab8<'_> {
+        type Output = ([f32; 8], u32);
+        fn run<L: Lanes8>(self) -> Self::Output {
+            let rays = SlabRays::<L>::splat(self.ray);
+            let plane = |axis: usize, max: bool| L::load(&self.boxes[axis + 3 * usize::from(max)]);
+            let (t, mask) = slab(&rays, plane, L::splat(0.0), L::splat(self.t_max));
+            (t.to_array(), mask)
+        }
+    }
+
+    /// Stores box `k` of eight: min planes in rows 0-2, max planes in rows 3-5.
+    fn put(boxes: &mut [[f32; 8]; 6], k: usize, lo: Vec3, hi: Vec3) {
+        for a in 0..3 {
+            boxes[a][k] = lo[a];
+            boxes[a + 3][k] = hi[a];
+        }
+    }
+
+    /// The exact slab test in f64 for the ray's f32 inverse direction (a difference of two floats and
+    /// its product with a third are exact in f64): whether box `k` meets the ray within `[0, t_max]`.
+    fn exact(ray: &Ray, boxes: &[[f32; 8]; 6], k: usize, t_max: f32) -> bool {
+        let inv = safe_inverse(ray.dir);
+        let (mut near, mut far) = (0.0f64, t_max as f64);
+        for a in 0..3 {
+            let t0 = (boxes[a][k] as f64 - ray.origin[a] as f64) * inv[a] as f64;
+            let t1 = (boxes[a + 3][k] as f64 - ray.origin[a] as f64) * inv[a] as f64;
+            near = near.max(t0.min(t1));
+            far = far.min(t0.max(t1));
+        }
+        near <= far
+    }
+
+    /// Every lane type enters every box the exact test says the ray meets, on the cases where
+    /// rounding decides: boxes around a point of the ray, flat on some axes, some with a face through
+    /// the point (the ray grazes it), origins far from the box, and directions along an axis. The
+    /// fused form (AVX2, AVX-512) is checked wherever the CPU has it.
+    #[test]
+    fn slab_never_rejects_a_box_the_ray_meets() {
+        let isas: Vec<Isa> = [Simd::Portable, Simd::Avx2, Simd::Avx512]
+            .into_iter()
+            .filter_map(|s| {
+                let isa = Isa::new(s);
+                if isa.is_none() {
+                    eprintln!("this CPU lacks {s:?}: its slab test is not checked here");
+                }
+                isa
+            })
+            .collect();
+        let mut rng = TestRng::new(0x51ab);
+        let (mut met, mut checked) = (0, 0);
+        for case in 0..20_000 {
+            let scale = [1.0, 1e-3, 1e3][case % 3];
+            let origin = rng.vec3(-1.0, 1.0) * scale * if case % 7 == 0 { 1e3 } else { 1.0 };
+            let mut dir = rng.direction();
+            if case % 5 == 0 {
+                dir[rng.below(3)] = 0.0;
+            }
+            let ray = Ray::new(origin, dir);
+            let mut boxes = [[0.0f32; 8]; 6];
+            for k in 0..8 {
+                let t = rng.range(0.0, 4.0) * scale;
+                let p = ray.origin + ray.dir * t;
+                let (mut lo, mut hi) = (p, p);
+                for a in 0..3 {
+                    match rng.below(4) {
+                        0 => {}
+                        1 => hi[a] += rng.range(0.0, 1e-3) * scale,
+                        2 => lo[a] -= rng.range(0.0, 1e-3) * scale,
+                        _ => {
+                            let w = rng.range(0.0, 0.1) * scale;
+                            (lo[a], hi[a]) = (p[a] - w, p[a] + w);
+                        }
+                    }
+                }
+                put(&mut boxes, k, lo, hi);
+            }
+            let t_max = 8.0 * scale;
+            for &isa in &isas {
+                let (_, mask) = isa.run8(Slab8 {
+                    ray: &ray,
+                    boxes: &boxes,
+                    t_max,
+                });
+                for k in 0..8 {
+                    if exact(&ray, &boxes, k, t_max) {
+                        met += 1;
+                        assert!(
+                            mask & (1 << k) != 0,
+                            "{:?}: box {k} of case {case} ({boxes:?}) meets {ray:?} but was not entered",
+                            isa.simd()
+                        );
+                    }
+                    checked += 1;
+                }
+            }
+        }
+        // About half the boxes are met exactly (a point of the ray rounded to floats is off the ray
+        // by an ulp, so flat boxes through it are met or missed by that much): the cases that decide.
+        assert!(met * 3 > checked, "{met} of {checked} boxes met");
+    }
+
+    /// Where the ray misses a box by a clear margin, no lane type enters it (the outward rounding is
+    /// a few ulps, not a looser test).
+    #[test]
+    fn slab_rejects_a_box_the_ray_clearly_misses() {
+        let mut rng = TestRng::new(0x0ff);
+        for case in 0..5_000 {
+            let ray = Ray::new(rng.vec3(-1.0, 1.0), rng.direction());
+            let mut boxes = [[0.0f32; 8]; 6];
+            for k in 0..8 {
+                let p = ray.origin + ray.dir * rng.range(0.5, 4.0);
+                // A box of half-width 0.01 moved 0.5 along an axis other than the ray's steepest `a`:
+                // to move 0.5 along that axis the ray moves at least 0.5 along `a`, out of the box's
+                // 0.02 there, so it never meets it.
+                let a = (0..3)
+                    .max_by(|&i, &j| ray.dir[i].abs().total_cmp(&ray.dir[j].abs()))
+                    .unwrap();
+                let mut c = p;
+                c[(a + 1) % 3] += 0.5;
+                put(&mut boxes, k, c - 0.01, c + 0.01);
+                assert!(!exact(&ray, &boxes, k, 8.0));
+            }
+            for s in [Simd::Portable, Simd::Avx2, Simd::Avx512] {
+                let Some(isa) = Isa::new(s) else { continue };
+                let (_, mask) = isa.run8(Slab8 {
+                    ray: &ray,
+                    boxes: &boxes,
+                    t_max: 8.0,
+                });
+                assert_eq!(mask, 0, "{s:?}: case {case}");
+            }
+        }
+    }
 }
