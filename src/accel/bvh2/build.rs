@@ -6,7 +6,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::{INTERSECTION_COST, Node, TRAVERSAL_COST};
+use super::{BLOCK_COST, INTERSECTION_COST, Node, TRAVERSAL_COST};
 use crate::accel::prims::{PrimKind, Prims};
 use crate::geometry::aabb::Aabb;
 
@@ -46,7 +46,8 @@ struct Info {
 
 /// Builds the nodes and the reordered ids of a BVH over the bounded primitives. `block` is how many
 /// primitives a leaf tests at the cost of one (4 for the BVH4's SIMD leaves, 1 for scalar leaves): the
-/// SAH then charges a leaf ⌈n / block⌉ tests, which favours leaves that fill their lanes.
+/// SAH then charges a leaf ⌈n / block⌉ tests, which favours leaves that fill their lanes, each at
+/// [`BLOCK_COST`] where `block > 1`.
 pub fn build(prims: &Prims, builder: Builder, block: usize) -> (Vec<Node>, Vec<u32>) {
     let n = prims.bounded();
     if n == 0 {
@@ -293,8 +294,13 @@ impl Ctx<'_> {
             }
         }
         let area = bounds.area().max(f32::MIN_POSITIVE);
-        let split_cost = TRAVERSAL_COST + INTERSECTION_COST * best.0 / area;
-        let leaf_cost = INTERSECTION_COST * (n as u32).div_ceil(self.block) as f32;
+        let test_cost = if self.block > 1 {
+            BLOCK_COST
+        } else {
+            INTERSECTION_COST
+        };
+        let split_cost = TRAVERSAL_COST + test_cost * best.0 / area;
+        let leaf_cost = test_cost * (n as u32).div_ceil(self.block) as f32;
         if best.0.is_infinite() {
             return (n > MAX_LEAF).then(|| self.median(ids, centroids));
         }
