@@ -6,9 +6,12 @@
 //! or for AVX-512 where the CPU has it: the same kernels, with the box test's compare written straight
 //! into a mask register). The single-ray kernel
 //! puts a node's children in the lanes (one ray against `W` boxes); the packet kernel puts eight rays in
-//! them (eight rays against one box). Both call [`slab`], the same operations on every lane type (its
+//! them (eight rays against one box). Both call [`slab`], the same test on every lane type (its
 //! distances' maximum, minimum and compare on the integers of their bits, exact on any instruction
-//! set), so every path enters exactly the same boxes and the images do not depend on the CPU.
+//! set; the distances themselves one fused multiply-subtract where the lanes have FMA, a subtract and
+//! a multiply where not, both rounded so that no box holding a hit is missed), so every path enters
+//! every box that holds a hit and the images do not depend on the CPU (the tests compare them byte for
+//! byte across the paths).
 //!
 //! AVX2 and AVX-512 code is reached only through [`Isa::run8`], and an [`Isa`] that selects either is
 //! made only by [`Isa::new`] after the CPU was asked: the [`Avx8`] lane type is private to this file,
