@@ -8,7 +8,7 @@
 //!   ([`crate::accel::Accel::intersect`]), shades the closest hit (Blinn-Phong over the light samples of
 //!   [`light`], each behind a shadow ray, [`crate::accel::Accel::occluded`]) and recurses into the
 //!   reflected and refracted rays ([`optics`]); a ray that leaves the scene sees the background
-//!   ([`env`]). With [`Kernel::Packet`], [`packets`] does the same for eight neighbouring pixels at a
+//!   ([`env`](mod@env)). With [`Kernel::Packet`], [`packets`] does the same for eight neighbouring pixels at a
 //!   time through the accelerators' packet verbs;
 //! - the colours land in a linear [`film::Film`], or in a [`progressive::Progressive`] sum of passes,
 //!   written as an image at the end (or as a `.partial` part of a frame, [`crate::parts`]).

@@ -230,7 +230,7 @@ impl<'a> Whitted<'a> {
     }
 
     /// The refracted and reflected rays of `ray`'s hit at `surface`; none at the depth limit, and only
-    /// the heavier one once `sample` has spent its [`SPLIT_BUDGET`]. A rough material's mirror
+    /// the heavier one once `sample` has spent its `SPLIT_BUDGET`. A rough material's mirror
     /// direction is perturbed within a ball of its roughness, drawn from the sample's generator.
     pub fn bounces(&self, ray: &Ray, surface: &Surface, depth: u32, sample: &mut PixelSample) -> Bounces {
         let mut out = self.split(ray, surface, depth, &mut sample.rng);

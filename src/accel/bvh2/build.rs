@@ -31,7 +31,7 @@ const PARALLEL_THRESHOLD: usize = 16 * 1024;
 /// Past this depth splits are by count (median), which bounds the depth by log2(n) more levels: a run of
 /// lopsided SAH splits, or midpoint splits of clustered centroids, cannot make the tree arbitrarily deep.
 const MAX_FREE_DEPTH: usize = 64;
-/// The deepest a built tree can be: [`MAX_FREE_DEPTH`] levels, then halvings of at most 2³² primitives.
+/// The deepest a built tree can be: `MAX_FREE_DEPTH` levels, then halvings of at most 2³² primitives.
 /// The traversal stacks are sized from it.
 pub const MAX_DEPTH: usize = MAX_FREE_DEPTH + 32;
 

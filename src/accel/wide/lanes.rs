@@ -318,7 +318,7 @@ impl<const MASK: bool> Avx8<MASK> {
     }
 }
 
-/// The instruction sets a wide BVH's kernels can run on (the public name of a choice; [`Isa`] is the
+/// The instruction sets a wide BVH's kernels can run on (the public name of a choice; `Isa` is the
 /// checked one).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Simd {
