@@ -53,7 +53,8 @@ pub fn safe_inverse(dir: Vec3) -> Vec3 {
 
 /// Factor applied to a box's exit distance so that a slab test never rejects a primitive that touches
 /// the box's boundary: 1 + 2γ₃ (Ize 2013, "Robust BVH Ray Traversal"), the rounding error bound of the
-/// subtract-and-multiply that computed it (the wide BVHs' fused form rounds less). Without it a hit on a flat node's edge can fall one ulp outside.
+/// subtract-and-multiply that computed it (the wide BVHs' fused form rounds less). Without it a hit on a
+/// flat node's edge can fall one ulp outside.
 pub const SLAB_ROBUST: f32 = 1.000_000_4;
 
 /// Factor on the closest hit's `t` below which a node is still visited. Boxes bound the exact

@@ -441,18 +441,18 @@ fn run_avx512<K: OnLanes8>(k: K) -> K::Output {
 
 /// Rays prepared for slab tests (Kay and Kajiya 1986): per axis their origins and (Embree's
 /// [`safe_inverse`]) inverse directions in lanes, splatted for one ray or side by side for a packet, the
-/// inverse directions again scaled by [`SLAB_ROBUST`] for the exit planes, the products of origin and
-/// inverse for [`slab`]'s fused form (rounded outward: see there), and per axis whether the max
+/// inverse directions again scaled by [`SLAB_ROBUST`] for the exit planes, what each distance
+/// subtracts ([`shifts`]: the origin, or for [`slab`]'s fused form the origin times each inverse), and
+/// per axis whether the max
 /// plane is the near one (Embree's near/far plane selection, once per ray or packet rather than a min/max
 /// per box). When a packet's rays disagree in a sign (`mixed`), each lane picks its own planes by its
 /// own sign (`negative`: all ones in the lanes whose inverse direction is negative), so that every lane
 /// computes what the single-ray test computes for its ray.
 pub(super) struct SlabRays<V> {
-    origin: [V; 3],
     inv: [V; 3],
     inv_far: [V; 3],
-    org_inv: [V; 3],
-    org_inv_far: [V; 3],
+    shift: [V; 3],
+    shift_far: [V; 3],
     negative: [V; 3],
     flip: [bool; 3],
     mixed: bool,
@@ -467,14 +467,16 @@ impl<V> SlabRays<V> {
     {
         let inv = safe_inverse(ray.dir);
         let inv_far = inv * SLAB_ROBUST;
-        let (oi, oif) = (ray.origin * inv, ray.origin * inv_far);
         let lanes = |v: Vec3| [V::splat(v.x), V::splat(v.y), V::splat(v.z)];
+        let (mut shift, mut shift_far) = (Vec3::ZERO, Vec3::ZERO);
+        for a in 0..3 {
+            (shift[a], shift_far[a]) = shifts::<N, V>(ray.origin[a], inv[a], inv_far[a]);
+        }
         SlabRays {
-            origin: lanes(ray.origin),
             inv: lanes(inv),
             inv_far: lanes(inv_far),
-            org_inv: lanes(oi + oi.abs() * NUDGE),
-            org_inv_far: lanes(oif - oif.abs() * NUDGE),
+            shift: lanes(shift),
+            shift_far: lanes(shift_far),
             negative: [V::splat(0.0); 3],
             flip: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
             mixed: false,
@@ -489,37 +491,28 @@ impl<V> SlabRays<V> {
     {
         // Plain loops and explicit arrays: `map` and `from_fn` closures over arrays were left out of
         // line here, outside the AVX2 compile (callgrind).
-        let (mut org_inv, mut org_inv_far) = ([[0.0f32; 8]; 3], [[0.0f32; 8]; 3]);
-        let (mut origin, mut inv, mut inv_far, mut sign_mask, mut negative) = (
-            [[0.0f32; 8]; 3],
-            [[0.0f32; 8]; 3],
-            [[0.0f32; 8]; 3],
-            [[0.0f32; 8]; 3],
-            [0u32; 3],
-        );
+        let (mut shift, mut shift_far) = ([[0.0f32; 8]; 3], [[0.0f32; 8]; 3]);
+        let (mut inv, mut inv_far, mut sign_mask, mut negative) =
+            ([[0.0f32; 8]; 3], [[0.0f32; 8]; 3], [[0.0f32; 8]; 3], [0u32; 3]);
         for (k, r) in rays.iter().enumerate() {
             let i = safe_inverse(r.dir);
             for a in 0..3 {
-                origin[a][k] = r.origin[a];
                 inv[a][k] = i[a];
                 inv_far[a][k] = i[a] * SLAB_ROBUST;
-                let (oi, oif) = (r.origin[a] * i[a], r.origin[a] * inv_far[a][k]);
-                org_inv[a][k] = oi + oi.abs() * NUDGE;
-                org_inv_far[a][k] = oif - oif.abs() * NUDGE;
+                (shift[a][k], shift_far[a][k]) = shifts::<8, V>(r.origin[a], i[a], inv_far[a][k]);
                 sign_mask[a][k] = f32::from_bits(if i[a] < 0.0 { u32::MAX } else { 0 });
                 negative[a] |= u32::from(i[a] < 0.0) << k;
             }
         }
         let negative = [negative[0] & live, negative[1] & live, negative[2] & live];
         SlabRays {
-            origin: [V::load(&origin[0]), V::load(&origin[1]), V::load(&origin[2])],
             inv: [V::load(&inv[0]), V::load(&inv[1]), V::load(&inv[2])],
             inv_far: [V::load(&inv_far[0]), V::load(&inv_far[1]), V::load(&inv_far[2])],
-            org_inv: [V::load(&org_inv[0]), V::load(&org_inv[1]), V::load(&org_inv[2])],
-            org_inv_far: [
-                V::load(&org_inv_far[0]),
-                V::load(&org_inv_far[1]),
-                V::load(&org_inv_far[2]),
+            shift: [V::load(&shift[0]), V::load(&shift[1]), V::load(&shift[2])],
+            shift_far: [
+                V::load(&shift_far[0]),
+                V::load(&shift_far[1]),
+                V::load(&shift_far[2]),
             ],
             negative: [
                 V::load(&sign_mask[0]),
@@ -529,6 +522,19 @@ impl<V> SlabRays<V> {
             flip: [negative[0] != 0, negative[1] != 0, negative[2] != 0],
             mixed: negative.iter().any(|&m| m != 0 && m != live),
         }
+    }
+}
+
+/// What one ray's entry and exit distances subtract on one axis, given its origin, inverse direction
+/// and exit inverse on that axis: the origin itself where `V` subtracts before multiplying; where it
+/// fuses, `origin · inv` rounded up and `origin · inv_far` rounded down by [`NUDGE`] ([`slab`]).
+#[inline(always)]
+fn shifts<const N: usize, V: Lanes<N>>(origin: f32, inv: f32, inv_far: f32) -> (f32, f32) {
+    if V::FUSED {
+        let (near, far) = (origin * inv, origin * inv_far);
+        (near + near.abs() * NUDGE, far - far.abs() * NUDGE)
+    } else {
+        (origin, origin)
     }
 }
 
@@ -573,11 +579,11 @@ pub(super) fn slab<const N: usize, V: Lanes<N>>(
             (plane(axis, flip), plane(axis, !flip))
         };
         if V::FUSED {
-            near[axis] = entry.mul_sub(rays.inv[axis], rays.org_inv[axis]);
-            far[axis] = exit.mul_sub(rays.inv_far[axis], rays.org_inv_far[axis]);
+            near[axis] = entry.mul_sub(rays.inv[axis], rays.shift[axis]);
+            far[axis] = exit.mul_sub(rays.inv_far[axis], rays.shift_far[axis]);
         } else {
-            near[axis] = entry.sub(rays.origin[axis]).mul(rays.inv[axis]);
-            far[axis] = exit.sub(rays.origin[axis]).mul(rays.inv_far[axis]);
+            near[axis] = entry.sub(rays.shift[axis]).mul(rays.inv[axis]);
+            far[axis] = exit.sub(rays.shift[axis]).mul(rays.inv_far[axis]);
         }
     }
     // Two levels of pairs rather than a chain of four: the chain's latency is the traversal's.

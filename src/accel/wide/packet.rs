@@ -25,8 +25,9 @@
 //! operation for operation on the same lanes (the near/far planes by each ray's own direction signs,
 //! [`SLAB_ROBUST`] on the exit, [`CULL_MARGIN`] on the hit; where the packets' lanes have FMA and the
 //! BVH4's SSE single rays do not, the fused and unfused forms of `lanes.rs`'s slab test, both of which
-//! enter every box holding a hit), so a ray is never kept out of a box that holds its hit, and each leaf runs the single-ray kernel's leaf code, so hits, and ties inside a leaf,
-//! come out bit for bit the same. Only the order of leaves differs (the packet's, not each ray's), which
+//! enter every box holding a hit), so a ray is never kept out of a box that holds its hit, and each
+//! leaf runs the single-ray kernel's leaf code, so hits, and ties inside a leaf, come out bit for bit
+//! the same. Only the order of leaves differs (the packet's, not each ray's), which
 //! could matter only for two primitives in different leaves hit at bit-identical `t`.
 //!
 //! [`SLAB_ROBUST`]: crate::geometry::ray::SLAB_ROBUST
