@@ -15,13 +15,22 @@ const HUGE: usize = 2 << 20;
 /// `v`, moved to memory advised for huge pages when it spans at least two of them (smaller arrays fit
 /// the TLB anyway and are returned as they are).
 pub fn on_huge_pages<T: Copy>(v: Vec<T>) -> Vec<T> {
-    let bytes = std::mem::size_of_val(v.as_slice());
-    if bytes < 2 * HUGE || !cfg!(target_os = "linux") {
+    if size_of_val(v.as_slice()) < 2 * HUGE || !cfg!(target_os = "linux") {
         return v;
     }
-    let mut out = Vec::with_capacity(v.len());
-    advise(out.as_ptr() as usize, bytes);
+    let mut out = with_capacity_on_huge_pages(v.len());
     out.extend_from_slice(&v);
+    out
+}
+
+/// An empty vector with room for `n` elements, its memory advised for huge pages when it spans at least
+/// two of them: filled without growing, it is on huge pages without a copy.
+pub fn with_capacity_on_huge_pages<T>(n: usize) -> Vec<T> {
+    let out = Vec::with_capacity(n);
+    let bytes = n * size_of::<T>();
+    if bytes >= 2 * HUGE {
+        advise(out.as_ptr() as usize, bytes);
+    }
     out
 }
 

@@ -121,7 +121,7 @@ impl<'a, const W: usize> WideBvh<'a, W> {
             prims: *bvh2.prims(),
             nodes: on_huge_pages(c.nodes),
             ids: bvh2.ids,
-            tris: on_huge_pages(c.tris),
+            tris: c.tris,
             root: c.root,
             bounds: bvh2.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds),
             isa: Isa::detect(),
