@@ -16,7 +16,6 @@ use std::hint::black_box;
 use std::path::Path;
 use std::process::ExitCode;
 
-use whitted::accel::bvh2::{Builder, Bvh2};
 use whitted::accel::policy::{AnyHit, Closest};
 use whitted::accel::wide::Bvh4;
 use whitted::accel::{Accel, AccelKind, Hit, Prims};
@@ -68,9 +67,7 @@ fn measured_packets<const ANY: bool>(accel: &Accel, rays: &[(Ray, f32)]) -> usiz
 
 #[inline(never)]
 fn measured_build(prims: Prims) -> usize {
-    Bvh4::from_bvh2(Bvh2::new(prims, Builder::Sah { bins: 12 }))
-        .stats()
-        .nodes
+    Bvh4::new(prims, 12).map_or(0, |b| b.stats().nodes)
 }
 
 #[inline(never)]

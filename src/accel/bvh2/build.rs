@@ -329,6 +329,8 @@ impl Ctx {
         }
     }
 
+    // Not inlined: the leaves' early return above would otherwise pay for clearing the bins.
+    #[inline(never)]
     fn sah_with<const B: usize>(&self, refs: &mut [PrimRef], extent: &Extent, bins: usize) -> Option<Split> {
         let n = refs.len();
         let centroids = &extent.centroids;
@@ -366,7 +368,7 @@ impl Ctx {
                 b = b.union(boxes[k]);
                 c += count[k];
                 right_count[k] = c;
-                if c > 0 {
+                if c > 0 && count[k - 1] > 0 {
                     right_cost[k] = b.area() * tests(c);
                 }
             }
