@@ -32,8 +32,9 @@ pub const MAX_LEAF: usize = 8;
 const MIDPOINT_LEAF: usize = 4;
 /// Below this many primitives a subtree is built on the current thread.
 const PARALLEL_THRESHOLD: usize = 16 * 1024;
-/// From this many primitives a node bins and partitions in chunks of about this size in parallel (the
-/// root and the levels just below it, where `rayon::join` has not yet given every thread a subtree).
+/// A node of at least twice this many primitives bins in chunks of this size, and partitions its
+/// halves, in parallel (the root and the levels just below it, where `rayon::join` has not yet given
+/// every thread a subtree of its own).
 const PARALLEL_CHUNK: usize = 64 * 1024;
 /// Past this depth splits are by count (median), which bounds the depth by log2(n) more levels: a run of
 /// lopsided SAH splits, or midpoint splits of clustered centroids, cannot make the tree arbitrarily deep.
