@@ -32,10 +32,17 @@ pub const MAX_LEAF: usize = 8;
 const MIDPOINT_LEAF: usize = 4;
 /// Below this many primitives a subtree is built on the current thread.
 const PARALLEL_THRESHOLD: usize = 16 * 1024;
-/// A node of at least twice this many primitives bins in chunks of this size, and partitions its
+/// A node of at least `PARALLEL_NODE` primitives bins in chunks of `PARALLEL_CHUNK`, and partitions its
 /// halves, in parallel (the root and the levels just below it, where `rayon::join` has not yet given
 /// every thread a subtree of its own).
 const PARALLEL_CHUNK: usize = 64 * 1024;
+const PARALLEL_NODE: usize = 2 * PARALLEL_CHUNK;
+/// A node slot reserved before the builder knows what goes in it.
+const PLACEHOLDER: Node = Node {
+    bounds: Aabb::EMPTY,
+    first: 0,
+    count: 0,
+};
 /// Past this depth splits are by count (median), which bounds the depth by log2(n) more levels: a run of
 /// lopsided SAH splits, or midpoint splits of clustered centroids, cannot make the tree arbitrarily deep.
 const MAX_FREE_DEPTH: usize = 64;
@@ -200,11 +207,7 @@ impl Ctx {
     fn subtree(&self, refs: &mut [PrimRef], extent: Extent, base: u32, depth: usize) -> Vec<Node> {
         if refs.len() < PARALLEL_THRESHOLD {
             let mut nodes = Vec::with_capacity(2 * refs.len().div_ceil(2));
-            nodes.push(Node {
-                bounds: Aabb::EMPTY,
-                first: 0,
-                count: 0,
-            });
+            nodes.push(PLACEHOLDER);
             self.fill(&mut nodes, 0, refs, extent, base, depth);
             return nodes;
         }
@@ -259,12 +262,7 @@ impl Ctx {
             first: first as u32,
             count: 0,
         };
-        let placeholder = Node {
-            bounds: Aabb::EMPTY,
-            first: 0,
-            count: 0,
-        };
-        nodes.extend([placeholder, placeholder]);
+        nodes.extend([PLACEHOLDER, PLACEHOLDER]);
         let (l, r) = refs.split_at_mut(mid);
         self.fill(nodes, first, l, left, base, depth + 1);
         self.fill(nodes, first + 1, r, right, base + mid as u32, depth + 1);
@@ -345,7 +343,7 @@ impl Ctx {
             scale: Vec3A::select(size.cmpgt(Vec3A::ZERO), bins as f32 / size, Vec3A::ZERO),
             last: Vec3A::splat((bins - 1) as f32),
         };
-        let binned = if n >= 2 * PARALLEL_CHUNK {
+        let binned = if n >= PARALLEL_NODE {
             refs.par_chunks(PARALLEL_CHUNK)
                 .map(|chunk| Bins::<B>::of(chunk, &binner))
                 .reduce(|| Bins::EMPTY, Bins::merge)
@@ -361,7 +359,6 @@ impl Ctx {
             // Sweep from the right for the right-hand areas, then from the left evaluating each plane.
             // A side with nothing in it has no area to ask for (its box is empty), and a plane past an
             // empty bin splits as the one before it did, so only planes past a filled bin count.
-            let tests = |c: u32| self.tests(c as usize);
             let mut right_cost = [0f32; B];
             let mut right_count = [0u32; B];
             let (mut b, mut c) = (Box3::EMPTY, 0);
@@ -370,7 +367,7 @@ impl Ctx {
                 c += count[k];
                 right_count[k] = c;
                 if c > 0 && count[k - 1] > 0 {
-                    right_cost[k] = b.area() * tests(c);
+                    right_cost[k] = b.area() * self.tests(c as usize);
                 }
             }
             let (mut b, mut c) = (Box3::EMPTY, 0);
@@ -381,7 +378,7 @@ impl Ctx {
                 b = b.union(boxes[k]);
                 c += count[k];
                 if right_count[k + 1] > 0 {
-                    let cost = b.area() * tests(c) + right_cost[k + 1];
+                    let cost = b.area() * self.tests(c as usize) + right_cost[k + 1];
                     if cost < best.0 {
                         best = (cost, axis, k);
                     }
@@ -496,7 +493,7 @@ fn median(refs: &mut [PrimRef], centroids: &Box3) -> Split {
 /// ranges partition their halves in parallel, then swap the first half's right part with the second
 /// half's left part (only as many as the shorter of the two: the order within a side is free).
 fn partition(refs: &mut [PrimRef], left: impl Fn(&PrimRef) -> bool + Sync + Copy) -> Split {
-    if refs.len() < 2 * PARALLEL_CHUNK {
+    if refs.len() < PARALLEL_NODE {
         return partition_serial(refs, left);
     }
     let half = refs.len() / 2;
