@@ -25,8 +25,8 @@ use whitted::render::{Options, RayCounts, Renderer};
 use whitted::scene::Scene;
 
 const LOOPS: &str = "closest-primary, closest-diffuse, any-shadow, packet-primary, packet-shadow, \
-                     build-sah, shade, frame, closest-primary-bvh8, closest-diffuse-bvh8, any-shadow-bvh8, and \
-                     with the `embree` feature closest-primary-embree, closest-diffuse-embree, any-shadow-embree";
+                     packet-diffuse, build-sah, shade, frame, each but the last three with the suffix -bvh8 \
+                     (closest-primary-bvh8, ...), and with the `embree` feature each of those with -embree";
 const WIDTH: u32 = 320;
 const HEIGHT: u32 = 180;
 
@@ -133,6 +133,9 @@ fn run(name: &str) -> Result<(), String> {
         // AVX2 and no AVX-512, so Embree dispatches to its AVX2 kernels, as ours do).
         let embree = Accel::build(prims, AccelKind::Embree);
         eprintln!("{}", embree.describe());
+        if let Some(counts) = packets(base, &w, &embree) {
+            return report(name, counts);
+        }
         let closest = |r: &Ray, h: &mut Hit| embree.intersect(r, 0.0, h);
         let any = |r: &Ray, h: &mut Hit| embree.occluded(r, 0.0, h.t);
         return report(name, single_rays(name, base, &w, closest, any)?);
@@ -144,22 +147,37 @@ fn run(name: &str) -> Result<(), String> {
             return Err("the dragon did not get a BVH8".into());
         };
         eprintln!("bvh8 slab tests: {:?}", bvh8.simd());
+        if let Some(counts) = packets(base, &w, &accel8) {
+            return report(name, counts);
+        }
         let closest = |r: &Ray, h: &mut Hit| bvh8.traverse::<Closest>(r, 0.0, h);
         let any = |r: &Ray, h: &mut Hit| bvh8.traverse::<AnyHit>(r, 0.0, h);
         return report(name, single_rays(name, base, &w, closest, any)?);
     }
+    if let Some(counts) = packets(name, &w, &accel) {
+        return report(name, counts);
+    }
     let closest = |r: &Ray, h: &mut Hit| bvh.traverse::<Closest>(r, 0.0, h);
     let any = |r: &Ray, h: &mut Hit| bvh.traverse::<AnyHit>(r, 0.0, h);
+    report(name, single_rays(name, name, &w, closest, any)?)
+}
+
+/// The packet loop `base` over the workload `w` through `accel`'s packet verbs: `(rays, hits)`, or
+/// `None` for a name that is not a packet loop.
+fn packets(base: &str, w: &Workload, accel: &Accel) -> Option<(usize, usize)> {
     let unbounded = |rays: &[Ray]| rays.iter().map(|r| (*r, f32::INFINITY)).collect::<Vec<_>>();
-    let counts = match name {
+    Some(match base {
         "packet-primary" => (
             w.primary.len(),
-            measured_packets::<false>(&accel, &unbounded(&w.primary)),
+            measured_packets::<false>(accel, &unbounded(&w.primary)),
         ),
-        "packet-shadow" => (w.shadow.len(), measured_packets::<true>(&accel, &w.shadow)),
-        _ => single_rays(name, name, &w, closest, any)?,
-    };
-    report(name, counts)
+        "packet-shadow" => (w.shadow.len(), measured_packets::<true>(accel, &w.shadow)),
+        "packet-diffuse" => (
+            w.diffuse.len(),
+            measured_packets::<false>(accel, &unbounded(&w.diffuse)),
+        ),
+        _ => return None,
+    })
 }
 
 /// The single-ray loop `base` (the loop `name` less its structure's suffix) over the workload `w` with a

@@ -12,8 +12,8 @@
 //! carrying the mask of rays that entered it and their entry distances; a ray leaves an entry once it
 //! has a hit nearer than its entry, and an entry no ray is left in is skipped.
 //!
-//! What is SIMD over the rays: every child box test (the node's boxes one at a time, against the eight
-//! lanes, through the same [`slab`] as the single-ray kernel) and the culling of stack entries; the
+//! What is SIMD over the rays: every child box test (the node's boxes two at a time, each against the
+//! eight lanes, through the same [`slab`] as the single-ray kernel) and the culling of stack entries; the
 //! whole kernel runs on the lane type of the instruction set the BVH chose ([`super::lanes::Isa`]).
 //! What goes ray by ray: the leaves, each active ray through the single-ray kernel's own leaf test
 //! ([`WideBvh::leaf`]), and the planes beside the hierarchy. Testing one triangle against the eight lanes
@@ -34,7 +34,7 @@
 
 use std::marker::PhantomData;
 
-use super::lanes::{Lanes8, OnLanes8, SlabRays, slab};
+use super::lanes::{Lanes8, OnLanes8, SlabRays, Twice, slab};
 use super::traverse::sort_far_to_near;
 use super::{ChildRef, EMPTY, LEAF, STACK, WideBvh};
 use crate::accel::packet::{HitPacket, PACKET, RayPacket, bits};
@@ -122,7 +122,9 @@ impl<P: HitPolicy, const W: usize> OnLanes8 for Packet<'_, '_, P, W> {
             return found as u8;
         }
         let p = SlabRays::<L>::packet(rays, live);
+        let p2 = p.doubled();
         let lo = L::splat(t_min);
+        let lo2 = Twice(lo, lo);
         let margin = L::splat(CULL_MARGIN);
         // The rays' hit distances, kept in lanes beside `hits`.
         let limits = |hits: &HitPacket| {
@@ -157,23 +159,30 @@ impl<P: HitPolicy, const W: usize> OnLanes8 for Packet<'_, '_, P, W> {
                 let node = &bvh.nodes[current as usize];
                 let t_max = t_hit.mul(margin);
                 let start = stack.len();
-                for c in 0..W {
+                let t_max2 = Twice(t_max, t_max);
+                // Two children a step (see `Twice`: measured 5-15% faster than a child a step).
+                for c in (0..W).step_by(2) {
+                    // The collapse fills a node's slots first to last: the first empty one ends them
+                    // (an empty second slot of a pair has an inverted box, which no ray enters).
                     if node.child[c] == EMPTY {
-                        continue;
+                        break;
                     }
                     let plane = |axis: usize, max: bool| {
-                        L::splat(if max { node.max[axis][c] } else { node.min[axis][c] })
+                        let a = if max { &node.max[axis] } else { &node.min[axis] };
+                        Twice(L::splat(a[c]), L::splat(a[c + 1]))
                     };
-                    let (entry, entered) = slab(&p, plane, lo, t_max);
-                    let entered = entered & mask;
-                    if entered != 0 {
-                        bvh.prefetch(node.child[c]);
-                        stack.push(Entry {
-                            node: node.child[c],
-                            mask: entered as u8,
-                            key: entry.to_array()[entered.trailing_zeros() as usize],
-                            entry,
-                        });
+                    let (Twice(entry0, entry1), entered) = slab(&p2, plane, lo2, t_max2);
+                    for (k, entry, entered) in [(c, entry0, entered & 0xff), (c + 1, entry1, entered >> 8)] {
+                        let entered = entered & mask;
+                        if entered != 0 {
+                            bvh.prefetch(node.child[k]);
+                            stack.push(Entry {
+                                node: node.child[k],
+                                mask: entered as u8,
+                                key: entry.to_array()[entered.trailing_zeros() as usize],
+                                entry,
+                            });
+                        }
                     }
                 }
                 match stack.len() - start {
