@@ -121,8 +121,9 @@ impl<P: HitPolicy, const W: usize> OnLanes8 for Packet<'_, '_, P, W> {
         if live == 0 || bvh.root == EMPTY {
             return found as u8;
         }
-        let p = SlabRays::<L>::packet(rays, live);
-        let p2 = p.doubled();
+        // The rays twice over, for two boxes a step (both widths are even).
+        const { assert!(W.is_multiple_of(2)) };
+        let p2 = SlabRays::<L>::packet(rays, live).doubled();
         let lo = L::splat(t_min);
         let lo2 = Twice(lo, lo);
         let margin = L::splat(CULL_MARGIN);
