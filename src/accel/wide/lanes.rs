@@ -94,6 +94,29 @@ pub(super) trait Lanes8: Lanes<8> {
 #[derive(Clone, Copy)]
 pub(super) struct Twice<L>(pub L, pub L);
 
+/// [`Twice`]'s operations: each half's own, the lane masks side by side (the second half's bits above
+/// the first's eight).
+macro_rules! each_half {
+    (lanes: $($f:ident),*) => {$(
+        #[inline(always)]
+        fn $f(self, o: Self) -> Self {
+            Twice(self.0.$f(o.0), self.1.$f(o.1))
+        }
+    )*};
+    (mask: $($f:ident),*) => {$(
+        #[inline(always)]
+        fn $f(self, o: Self) -> u32 {
+            self.0.$f(o.0) | self.1.$f(o.1) << 8
+        }
+    )*};
+    (unary: $($f:ident),*) => {$(
+        #[inline(always)]
+        fn $f(self) -> Self {
+            Twice(self.0.$f(), self.1.$f())
+        }
+    )*};
+}
+
 impl<L: Lanes8> Lanes<16> for Twice<L> {
     #[inline(always)]
     fn splat(v: f32) -> Self {
@@ -114,58 +137,9 @@ impl<L: Lanes8> Lanes<16> for Twice<L> {
         out[8..].copy_from_slice(&self.1.to_array());
         out
     }
-    #[inline(always)]
-    fn sub(self, o: Self) -> Self {
-        Twice(self.0.sub(o.0), self.1.sub(o.1))
-    }
-    #[inline(always)]
-    fn mul(self, o: Self) -> Self {
-        Twice(self.0.mul(o.0), self.1.mul(o.1))
-    }
-    #[inline(always)]
-    fn le(self, o: Self) -> u32 {
-        self.0.le(o.0) | self.1.le(o.1) << 8
-    }
-    #[inline(always)]
-    fn add(self, o: Self) -> Self {
-        Twice(self.0.add(o.0), self.1.add(o.1))
-    }
-    #[inline(always)]
-    fn div(self, o: Self) -> Self {
-        Twice(self.0.div(o.0), self.1.div(o.1))
-    }
-    #[inline(always)]
-    fn neg(self) -> Self {
-        Twice(self.0.neg(), self.1.neg())
-    }
-    #[inline(always)]
-    fn abs(self) -> Self {
-        Twice(self.0.abs(), self.1.abs())
-    }
-    #[inline(always)]
-    fn lt(self, o: Self) -> u32 {
-        self.0.lt(o.0) | self.1.lt(o.1) << 8
-    }
-    #[inline(always)]
-    fn ge(self, o: Self) -> u32 {
-        self.0.ge(o.0) | self.1.ge(o.1) << 8
-    }
-    #[inline(always)]
-    fn ne(self, o: Self) -> u32 {
-        self.0.ne(o.0) | self.1.ne(o.1) << 8
-    }
-    #[inline(always)]
-    fn max_bits(self, o: Self) -> Self {
-        Twice(self.0.max_bits(o.0), self.1.max_bits(o.1))
-    }
-    #[inline(always)]
-    fn min_bits(self, o: Self) -> Self {
-        Twice(self.0.min_bits(o.0), self.1.min_bits(o.1))
-    }
-    #[inline(always)]
-    fn le_bits(self, o: Self) -> u32 {
-        self.0.le_bits(o.0) | self.1.le_bits(o.1) << 8
-    }
+    each_half!(lanes: sub, mul, add, div, max_bits, min_bits);
+    each_half!(mask: le, lt, ge, ne, le_bits);
+    each_half!(unary: neg, abs);
     #[inline(always)]
     fn select(self, if_set: Self, if_clear: Self) -> Self {
         Twice(
