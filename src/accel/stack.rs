@@ -43,6 +43,18 @@ impl<T: Copy, const N: usize> Stack<T, N> {
         self.len += 1;
     }
 
+    /// Pushes `n` entries that `fill` writes, from the first free slot it is given on, at once (a SIMD
+    /// store of a sorted run). Panics past `N` entries, as [`Stack::push`] does.
+    ///
+    /// # Safety
+    /// `fill` must write all `n` entries from that pointer on, and nothing past them.
+    #[inline(always)]
+    pub unsafe fn push_written(&mut self, n: usize, fill: impl FnOnce(*mut T)) {
+        assert!(n <= N - self.len, "stack overflow");
+        fill(self.items[self.len..].as_mut_ptr().cast());
+        self.len += n;
+    }
+
     /// Pops the top entry.
     #[inline(always)]
     pub fn pop(&mut self) -> Option<T> {
@@ -89,6 +101,32 @@ mod tests {
         assert_eq!(s.pop(), Some((0, 0.0)));
         assert!(s.is_empty());
         assert_eq!(s.pop(), None);
+    }
+
+    #[test]
+    fn push_written_adds_what_was_written() {
+        let mut s: Stack<u32, 8> = Stack::new();
+        s.push(7);
+        // SAFETY: the closure writes exactly the three entries it was given room for.
+        unsafe {
+            s.push_written(3, |at| {
+                for i in 0..3 {
+                    at.add(i).write(10 + i as u32);
+                }
+            })
+        };
+        assert_eq!(s.len(), 4);
+        let popped: Vec<u32> = std::iter::from_fn(|| s.pop()).collect();
+        assert_eq!(popped, [12, 11, 10, 7]);
+    }
+
+    #[test]
+    #[should_panic]
+    fn push_written_past_capacity_panics() {
+        let mut s: Stack<u32, 2> = Stack::new();
+        s.push(1);
+        // SAFETY: never runs the closure: two more do not fit.
+        unsafe { s.push_written(2, |_| {}) };
     }
 
     #[test]

@@ -13,6 +13,10 @@
 //! every box that holds a hit and the images do not depend on the CPU (the tests compare them byte for
 //! byte across the paths).
 //!
+//! Where the single-ray kernel enters three or more children, [`Lanes::order_entered`] orders them: a
+//! stable insertion sort on every lane type but AVX-512's, which sorts them in lanes with no branch on
+//! their distances (`Avx8::order_by_network`), in the same order.
+//!
 //! AVX2 and AVX-512 code is reached only through [`Isa::run8`], and an [`Isa`] that selects either is
 //! made only by [`Isa::new`] after the CPU was asked: the [`Avx8`] lane type is private to this file,
 //! and the [`Detected`] token that those variants carry has a private field. No other code can run
@@ -25,6 +29,9 @@ use glam::Vec3;
 use wide::bytemuck::cast;
 use wide::{f32x4, f32x8, i32x4, i32x8};
 
+use super::ChildRef;
+use super::traverse::{Visit, push_ordered};
+use crate::accel::stack::Stack;
 use crate::geometry::ray::{Ray, SLAB_ROBUST, safe_inverse};
 
 /// Relative outward move of a per-ray `origin · inv` for the fused slab test: 2⁻²², four times the
@@ -74,6 +81,18 @@ pub(super) trait Lanes<const N: usize>: Copy {
     const FUSED: bool;
     /// `self * m - s`, rounded once where [`Lanes::FUSED`], else twice.
     fn mul_sub(self, m: Self, s: Self) -> Self;
+    /// The children a single ray entered (the lanes of `mask`, at least three, their entry distances
+    /// in `self`) pushed on `stack` far to near but for the nearest, which is returned: what
+    /// [`push_ordered`] does, which every lane type but AVX-512's runs.
+    #[inline(always)]
+    fn order_entered<const S: usize>(
+        self,
+        mask: u32,
+        child: &[ChildRef; N],
+        stack: &mut Stack<Visit, S>,
+    ) -> ChildRef {
+        push_ordered(self.to_array(), mask, child, stack)
+    }
 }
 
 /// Eight lanes that can be filled from two halves of four: two four-triangle leaf blocks side by side
@@ -264,7 +283,7 @@ struct Avx8<const MASK: bool>(__m256);
 macro_rules! avx {
     ($e:expr) => {
         // SAFETY: `Avx8` is used only by code that `run_avx2` or `run_avx512` runs, on CPUs with AVX2
-        // (and AVX-512 F and VL for `Avx8<true>`, the only user of the AVX-512 intrinsic; see the type).
+        // (and AVX-512 F and VL for `Avx8<true>`, the only user of AVX-512 intrinsics; see the type).
         unsafe { $e }
     };
 }
@@ -360,6 +379,19 @@ impl<const MASK: bool> Lanes<8> for Avx8<MASK> {
     fn mul_sub(self, m: Self, s: Self) -> Self {
         Avx8(avx!(_mm256_fmsub_ps(self.0, m.0, s.0)))
     }
+    #[inline(always)]
+    fn order_entered<const S: usize>(
+        self,
+        mask: u32,
+        child: &[ChildRef; 8],
+        stack: &mut Stack<Visit, S>,
+    ) -> ChildRef {
+        if MASK {
+            self.order_by_network(mask, child, stack)
+        } else {
+            push_ordered(self.to_array(), mask, child, stack)
+        }
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -375,6 +407,69 @@ impl<const MASK: bool> Lanes8 for Avx8<MASK> {
 
 #[cfg(target_arch = "x86_64")]
 impl<const MASK: bool> Avx8<MASK> {
+    /// [`Lanes::order_entered`] without a branch on the children's distances (AVX-512 F; only where
+    /// `MASK`): each lane's key is its distance's bits above `7 - lane` (so that among equal distances
+    /// the later lane sorts nearer, as [`push_ordered`]'s stable sort has it), the entered lanes' keys
+    /// are compressed into the low lanes (`vpcompressq` into a register: the compress-store to memory
+    /// is slow on some CPUs), the rest filled with the largest key, and sorted nearest first by
+    /// Batcher's odd-even merge network (Knuth, *TAOCP* vol. 3, 5.3.4): the optimal network for four
+    /// on each half, (0,1)(2,3), (0,2)(1,3), (1,2), then, only for more than four children, the merge
+    /// of the halves, (0,4)(1,5)(2,6)(3,7), (2,4)(3,5), (1,2)(3,4)(5,6); each layer a permute, a max
+    /// and a masked min. Lane 0 is the nearest; the others get their children back through their
+    /// keys' lane numbers and are stored far to near in one masked store.
+    #[inline(always)]
+    fn order_by_network<const S: usize>(
+        self,
+        mask: u32,
+        child: &[ChildRef; 8],
+        stack: &mut Stack<Visit, S>,
+    ) -> ChildRef {
+        let n = mask.count_ones() as usize;
+        // SAFETY: reached only where `MASK`, i.e. from `run_avx512` on a CPU with AVX-512 F and VL
+        // (see the type); the masked store writes the `n - 1` entries `push_written` makes room for.
+        unsafe {
+            // Lane k holds 7 - k: a key's tie-breaker, and the index that reverses the lanes.
+            let reverse = _mm512_set_epi64(0, 1, 2, 3, 4, 5, 6, 7);
+            let bits = _mm512_cvtepu32_epi64(_mm256_castps_si256(self.0));
+            let keys = _mm512_or_si512(_mm512_slli_epi64::<32>(bits), reverse);
+            let mut s = _mm512_mask_compress_epi64(_mm512_set1_epi64(i64::MAX), mask as u8, keys);
+            // One layer: lane k's partner is `p`'s lane k; the lower of each pair (`low`) takes the min.
+            // (A macro, not a closure: a closure is not compiled for AVX-512 and would call the
+            // intrinsics out of line.)
+            macro_rules! layer {
+                ($s:expr, $p:expr, $low:expr) => {{
+                    let p = $p;
+                    _mm512_mask_min_epi64(_mm512_max_epi64($s, p), $low, $s, p)
+                }};
+            }
+            s = layer!(s, _mm512_shuffle_epi32::<0x4e>(s), 0b0101_0101);
+            s = layer!(s, _mm512_permutex_epi64::<0x4e>(s), 0b0011_0011);
+            s = layer!(s, _mm512_permutex_epi64::<0xd8>(s), 0b0010_0010);
+            if n > 4 {
+                s = layer!(s, _mm512_shuffle_i64x2::<0x4e>(s, s), 0b0000_1111);
+                let p = _mm512_permutexvar_epi64(_mm512_set_epi64(7, 6, 3, 2, 5, 4, 1, 0), s);
+                s = layer!(s, p, 0b0000_1100);
+                let p = _mm512_permutexvar_epi64(_mm512_set_epi64(7, 5, 6, 3, 4, 1, 2, 0), s);
+                s = layer!(s, p, 0b0010_1010);
+            }
+            let nearest = child[(_mm_cvtsi128_si64(_mm512_castsi512_si128(s)) as usize & 7) ^ 7];
+            // Each sorted key's child (lane 7 - key's low bits), its distance kept above: `Visit`s.
+            let children = _mm512_cvtepu32_epi64(_mm256_loadu_si256(child.as_ptr().cast()));
+            let by_key = _mm512_permutexvar_epi64(s, _mm512_permutexvar_epi64(reverse, children));
+            let visits = _mm512_ternarylogic_epi64::<0xea>(s, _mm512_set1_epi64(-1 << 32), by_key);
+            // Sorted lanes n - 1 down to 1 into stack slots 0 up to n - 2: the farthest deepest.
+            let down = _mm512_sub_epi64(
+                _mm512_set1_epi64(n as i64 - 1),
+                _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0),
+            );
+            let far_first = _mm512_permutexvar_epi64(down, visits);
+            stack.push_written(n - 1, |at| {
+                _mm512_mask_storeu_epi64(at.cast(), (1u8 << (n - 1)) - 1, far_first)
+            });
+            nearest
+        }
+    }
+
     /// The bit mask of the lanes where `self OP o`: with `MASK`, one compare into a mask register.
     #[inline(always)]
     fn cmp<const OP: i32>(self, o: Self) -> u32 {
@@ -392,7 +487,8 @@ impl<const MASK: bool> Avx8<MASK> {
 pub enum Simd {
     /// Baseline x86-64 SSE (or whatever `wide` maps to elsewhere): runs on every CPU.
     Portable,
-    /// 256-bit AVX2 (with FMA) for eight lanes: detected at run time.
+    /// 256-bit AVX2 (with FMA, and the BMI1 and POPCNT bit instructions that every AVX2 CPU has) for
+    /// eight lanes: detected at run time.
     Avx2,
     /// The AVX2 kernels compiled for AVX-512 (F and VL): mask registers for the box tests' results;
     /// detected at run time.
@@ -424,10 +520,10 @@ pub(super) struct Detected {
 pub(super) enum Isa {
     /// `wide`'s lanes: any CPU.
     Portable,
-    /// AVX2 and FMA, with the proof that the CPU has them.
+    /// AVX2, FMA, BMI1 and POPCNT, with the proof that the CPU has them.
     #[cfg(target_arch = "x86_64")]
     Avx2(Detected),
-    /// AVX-512 F and VL besides AVX2 and FMA, with the proof.
+    /// AVX-512 F and VL besides the above, with the proof.
     #[cfg(target_arch = "x86_64")]
     Avx512(Detected),
 }
@@ -443,7 +539,12 @@ impl Isa {
     /// `simd` if the running CPU has it.
     pub fn new(simd: Simd) -> Option<Isa> {
         #[cfg(target_arch = "x86_64")]
-        let avx2 = || is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma");
+        let avx2 = || {
+            is_x86_feature_detected!("avx2")
+                && is_x86_feature_detected!("fma")
+                && is_x86_feature_detected!("bmi1")
+                && is_x86_feature_detected!("popcnt")
+        };
         match simd {
             Simd::Portable => Some(Isa::Portable),
             #[cfg(target_arch = "x86_64")]
@@ -494,7 +595,7 @@ pub(super) trait OnLanes8 {
 /// `k` compiled for AVX2 (the whole kernel, so that its intrinsics and `wide`'s operations inline into
 /// one AVX2 function), on one 256-bit register per eight lanes.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
+#[target_feature(enable = "avx2,fma,bmi1,popcnt")]
 fn run_avx2<K: OnLanes8>(k: K) -> K::Output {
     k.run::<Avx8<false>>()
 }
@@ -502,7 +603,7 @@ fn run_avx2<K: OnLanes8>(k: K) -> K::Output {
 /// `k` compiled for AVX-512 F and VL (as a `target-cpu=native` build would compile it on such a CPU:
 /// EVEX encodings, 32 vector registers, mask registers), on the same 256-bit lanes.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+#[target_feature(enable = "avx2,fma,bmi1,popcnt,avx512f,avx512vl")]
 fn run_avx512<K: OnLanes8>(k: K) -> K::Output {
     k.run::<Avx8<true>>()
 }
@@ -793,6 +894,69 @@ mod tests {
         }
         // The boxes lie on the first ray's way: many rays enter them, so the masks are worth comparing.
         assert!(entered > 3_000, "{entered}");
+    }
+
+    /// [`Lanes::order_entered`] on the lanes [`Isa::run8`] picks: the nearest child and the stack.
+    struct Order<'a> {
+        t: &'a [f32; 8],
+        mask: u32,
+        child: &'a [ChildRef; 8],
+    }
+
+    impl OnLanes8 for Order<'_> {
+        type Output = (ChildRef, Vec<Visit>);
+        fn run<L: Lanes8>(self) -> Self::Output {
+            let mut stack = Stack::<Visit, 16>::new();
+            // An entry already on the stack, which the order must leave in place.
+            stack.push(Visit { child: 99, t: -1.0 });
+            let nearest = L::load(self.t).order_entered(self.mask, self.child, &mut stack);
+            (nearest, std::iter::from_fn(|| stack.pop()).collect())
+        }
+    }
+
+    /// Every lane type orders three to eight entered children as a sort by distance would, nearest
+    /// first and, among equal distances, the later lane first (the scalar stable sort's order), with
+    /// ties common: the nearest is returned, the others popped nearest first, the entry below kept.
+    #[test]
+    fn entered_children_come_nearest_first() {
+        let mut rng = TestRng::new(0x50f7);
+        let isas: Vec<Isa> = [Simd::Portable, Simd::Avx2, Simd::Avx512]
+            .into_iter()
+            .filter_map(Isa::new)
+            .collect();
+        let child: [ChildRef; 8] = std::array::from_fn(|k| (1000 + 7 * k as u32) | ((k as u32 % 2) << 31));
+        for case in 0..20_000 {
+            let mask = loop {
+                let m = rng.below(256) as u32;
+                if m.count_ones() >= 3 {
+                    break m;
+                }
+            };
+            // Distances from a handful of values (ties), or any (case odd); +0 and large ones too.
+            let t: [f32; 8] = std::array::from_fn(|_| match case % 2 {
+                0 => [0.0, 0.25, 1.0, 1.0e30][rng.below(4)],
+                _ => rng.range(0.0, 100.0),
+            });
+            let mut lanes: Vec<usize> = (0..8).filter(|k| mask >> k & 1 != 0).collect();
+            lanes.sort_by(|&a, &b| t[a].total_cmp(&t[b]).then(b.cmp(&a)));
+            let mut want: Vec<Visit> = lanes[1..]
+                .iter()
+                .map(|&k| Visit {
+                    child: child[k],
+                    t: t[k],
+                })
+                .collect();
+            want.push(Visit { child: 99, t: -1.0 });
+            for &isa in &isas {
+                let (nearest, popped) = isa.run8(Order {
+                    t: &t,
+                    mask,
+                    child: &child,
+                });
+                assert_eq!(nearest, child[lanes[0]], "{:?}: case {case}", isa.simd());
+                assert_eq!(popped, want, "{:?}: case {case}", isa.simd());
+            }
+        }
     }
 
     /// Stores box `k` of eight: min planes in rows 0-2, max planes in rows 3-5.

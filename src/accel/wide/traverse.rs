@@ -114,7 +114,7 @@ impl<const W: usize> WideBvh<'_, W> {
             return found;
         }
         let r = SlabRays::<L>::splat(ray);
-        let mut stack = Stack::<(ChildRef, f32), STACK>::new();
+        let mut stack = Stack::<Visit, STACK>::new();
         let mut current = self.root;
         loop {
             if current & LEAF != 0 {
@@ -125,8 +125,9 @@ impl<const W: usize> WideBvh<'_, W> {
                 let node = &self.nodes[current as usize];
                 let plane =
                     |axis: usize, max: bool| L::load(if max { &node.max[axis] } else { &node.min[axis] });
-                let (t, mut mask) = slab(&r, plane, L::splat(t_min), L::splat(hit.t * CULL_MARGIN));
-                let t = t.to_array();
+                let (lanes, mut mask) = slab(&r, plane, L::splat(t_min), L::splat(hit.t * CULL_MARGIN));
+                let t = lanes.to_array();
+                let entered = mask;
                 if mask != 0 {
                     let first = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -140,7 +141,10 @@ impl<const W: usize> WideBvh<'_, W> {
                             let k = mask.trailing_zeros() as usize;
                             mask &= mask - 1;
                             self.prefetch(node.child[k]);
-                            stack.push((node.child[k], t[k]));
+                            stack.push(Visit {
+                                child: node.child[k],
+                                t: t[k],
+                            });
                         }
                         current = node.child[first];
                         continue;
@@ -156,40 +160,68 @@ impl<const W: usize> WideBvh<'_, W> {
                             (second, first)
                         };
                         self.prefetch(node.child[far]);
-                        stack.push((node.child[far], t[far]));
+                        stack.push(Visit {
+                            child: node.child[far],
+                            t: t[far],
+                        });
                         current = node.child[near];
                         continue;
                     }
-                    // Three or more: push them, order the run far to near, descend into the nearest
-                    // (its entry was just tested against the hit so far).
-                    let start = stack.len();
-                    self.prefetch(node.child[first]);
-                    self.prefetch(node.child[second]);
-                    stack.push((node.child[first], t[first]));
-                    stack.push((node.child[second], t[second]));
-                    while mask != 0 {
-                        let k = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        self.prefetch(node.child[k]);
-                        stack.push((node.child[k], t[k]));
+                    // Three or more: all but the nearest go on the stack far to near, the nearest is
+                    // next (its entry was just tested against the hit so far).
+                    let mut rest = entered;
+                    while rest != 0 {
+                        self.prefetch(node.child[rest.trailing_zeros() as usize]);
+                        rest &= rest - 1;
                     }
-                    sort_far_to_near(stack.above_mut(start), |e| e.1);
-                    current = stack.pop().expect("just pushed").0;
+                    current = lanes.order_entered(entered, &node.child, &mut stack);
                     continue;
                 }
             }
             // Pop the next subtree that may still hold a closer hit.
             loop {
-                let Some((c, t_enter)) = stack.pop() else {
+                let Some(Visit { child, t }) = stack.pop() else {
                     return found;
                 };
-                if P::ANY || t_enter <= hit.t * CULL_MARGIN {
-                    current = c;
+                if P::ANY || t <= hit.t * CULL_MARGIN {
+                    current = child;
                     break;
                 }
             }
         }
     }
+}
+
+/// A single ray's stack entry: a child to visit and the ray's entry distance into its box. Eight bytes,
+/// the child first, so that an entry is one 64-bit lane of the AVX-512 child order (`lanes.rs`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(8))]
+pub(super) struct Visit {
+    pub child: ChildRef,
+    pub t: f32,
+}
+
+/// The children a single ray entered (the lanes of `mask`, at least three) with their entry distances
+/// `t`: all but the nearest pushed far to near ([`sort_far_to_near`], so among equal distances the later
+/// lane is nearer), the nearest returned. The scalar form of [`super::lanes::Lanes::order_entered`].
+#[inline(always)]
+pub(super) fn push_ordered<const N: usize, const S: usize>(
+    t: [f32; N],
+    mut mask: u32,
+    child: &[ChildRef; N],
+    stack: &mut Stack<Visit, S>,
+) -> ChildRef {
+    let start = stack.len();
+    while mask != 0 {
+        let k = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        stack.push(Visit {
+            child: child[k],
+            t: t[k],
+        });
+    }
+    sort_far_to_near(stack.above_mut(start), |e| e.t);
+    stack.pop().expect("just pushed").child
 }
 
 /// Sorts the 2 to 8 entries one node pushed by decreasing entry distance `key`, so that the nearest is
