@@ -15,7 +15,7 @@
 //!
 //! Where the single-ray kernel enters three or more children, [`Lanes::order_entered`] orders them: a
 //! stable insertion sort on every lane type but AVX-512's, which sorts them in lanes with no branch on
-//! their distances (`Avx8::order_by_network`), in the same order.
+//! their distances (`Avx8`'s `order_entered`), in the same order.
 //!
 //! AVX2 and AVX-512 code is reached only through [`Isa::run8`], and an [`Isa`] that selects either is
 //! made only by [`Isa::new`] after the CPU was asked: the [`Avx8`] lane type is private to this file,
@@ -379,6 +379,16 @@ impl<const MASK: bool> Lanes<8> for Avx8<MASK> {
     fn mul_sub(self, m: Self, s: Self) -> Self {
         Avx8(avx!(_mm256_fmsub_ps(self.0, m.0, s.0)))
     }
+    /// Without `MASK`, [`push_ordered`]. With it (AVX-512 F), without a branch on the children's
+    /// distances: each lane's key is its distance's bits above `7 - lane` (so that among equal
+    /// distances the later lane sorts nearer, as [`push_ordered`]'s stable sort has it), the entered
+    /// lanes' keys are compressed into the low lanes (`vpcompressq` into a register: the compress-store
+    /// to memory is slow on some CPUs), the rest filled with the largest key, and sorted nearest first
+    /// by Batcher's odd-even merge network (Knuth, *TAOCP* vol. 3, 5.3.4): the optimal network for four
+    /// on each half, (0,1)(2,3), (0,2)(1,3), (1,2), then, only for more than four children, the merge
+    /// of the halves, (0,4)(1,5)(2,6)(3,7), (2,4)(3,5), (1,2)(3,4)(5,6); each layer a permute, a max
+    /// and a masked min. Lane 0 is the nearest; the others get their children back through their
+    /// keys' lane numbers and are stored far to near in one masked store.
     #[inline(always)]
     fn order_entered<const S: usize>(
         self,
@@ -386,44 +396,9 @@ impl<const MASK: bool> Lanes<8> for Avx8<MASK> {
         child: &[ChildRef; 8],
         stack: &mut Stack<Visit, S>,
     ) -> ChildRef {
-        if MASK {
-            self.order_by_network(mask, child, stack)
-        } else {
-            push_ordered(self.to_array(), mask, child, stack)
+        if !MASK {
+            return push_ordered(self.to_array(), mask, child, stack);
         }
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl<const MASK: bool> Lanes8 for Avx8<MASK> {
-    const ONE_REGISTER: bool = true;
-
-    #[inline(always)]
-    fn halves(lo: &[f32; 4], hi: &[f32; 4]) -> Self {
-        // Two unaligned loads of four floats from four-float arrays, into one register.
-        Avx8(avx!(_mm256_loadu2_m128(hi.as_ptr(), lo.as_ptr())))
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl<const MASK: bool> Avx8<MASK> {
-    /// [`Lanes::order_entered`] without a branch on the children's distances (AVX-512 F; only where
-    /// `MASK`): each lane's key is its distance's bits above `7 - lane` (so that among equal distances
-    /// the later lane sorts nearer, as [`push_ordered`]'s stable sort has it), the entered lanes' keys
-    /// are compressed into the low lanes (`vpcompressq` into a register: the compress-store to memory
-    /// is slow on some CPUs), the rest filled with the largest key, and sorted nearest first by
-    /// Batcher's odd-even merge network (Knuth, *TAOCP* vol. 3, 5.3.4): the optimal network for four
-    /// on each half, (0,1)(2,3), (0,2)(1,3), (1,2), then, only for more than four children, the merge
-    /// of the halves, (0,4)(1,5)(2,6)(3,7), (2,4)(3,5), (1,2)(3,4)(5,6); each layer a permute, a max
-    /// and a masked min. Lane 0 is the nearest; the others get their children back through their
-    /// keys' lane numbers and are stored far to near in one masked store.
-    #[inline(always)]
-    fn order_by_network<const S: usize>(
-        self,
-        mask: u32,
-        child: &[ChildRef; 8],
-        stack: &mut Stack<Visit, S>,
-    ) -> ChildRef {
         let n = mask.count_ones() as usize;
         // SAFETY: reached only where `MASK`, i.e. from `run_avx512` on a CPU with AVX-512 F and VL
         // (see the type); the masked store writes the `n - 1` entries `push_written` makes room for.
@@ -469,7 +444,21 @@ impl<const MASK: bool> Avx8<MASK> {
             nearest
         }
     }
+}
 
+#[cfg(target_arch = "x86_64")]
+impl<const MASK: bool> Lanes8 for Avx8<MASK> {
+    const ONE_REGISTER: bool = true;
+
+    #[inline(always)]
+    fn halves(lo: &[f32; 4], hi: &[f32; 4]) -> Self {
+        // Two unaligned loads of four floats from four-float arrays, into one register.
+        Avx8(avx!(_mm256_loadu2_m128(hi.as_ptr(), lo.as_ptr())))
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl<const MASK: bool> Avx8<MASK> {
     /// The bit mask of the lanes where `self OP o`: with `MASK`, one compare into a mask register.
     #[inline(always)]
     fn cmp<const OP: i32>(self, o: Self) -> u32 {
