@@ -104,7 +104,7 @@ mod with_embree {
             let embree = Accel::try_build_with(prims, AccelKind::Embree, Default::default()).unwrap();
             assert!(matches!(embree, Accel::Embree(_)));
             let mut line = Vec::new();
-            for kernel in [Kernel::Single, Kernel::Packet] {
+            for kernel in Kernel::ALL {
                 let (a, b) = (render(&scene, &ours, kernel), render(&scene, &embree, kernel));
                 let n = a.len() / 3;
                 let d = differing(&a, &b);

@@ -61,7 +61,7 @@ fn every_scene_renders_the_recorded_bytes_with_every_accelerator_and_kernel() {
             accels.push(("brute force".into(), Accel::build(prims, AccelKind::None)));
         }
         for (name, accel) in &accels {
-            for kernel in [Kernel::Single, Kernel::Packet] {
+            for kernel in Kernel::ALL {
                 let mut options = Options::new(&scene);
                 (options.width, options.height) = (64, 48);
                 options.kernel = kernel;

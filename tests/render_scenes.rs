@@ -50,7 +50,7 @@ fn check(path: &Path) {
     // 128 is a multiple of the 4x2 packets; 125 leaves partial packets at the tiles' edges.
     let a125 = render(&scene, &first.accel, 125, Kernel::Single);
     for c in &list {
-        for kernel in [Kernel::Single, Kernel::Packet] {
+        for kernel in Kernel::ALL {
             assert!(
                 render(&scene, &c.accel, 128, kernel) == a,
                 "{}: {}, {kernel:?}, differs from {}'s single rays",
@@ -60,13 +60,15 @@ fn check(path: &Path) {
             );
         }
         if c.has_packet_kernel() {
-            assert!(
-                render(&scene, &c.accel, 125, Kernel::Packet) == a125,
-                "{}: {}'s packets differ from {}'s single rays at 125x125",
-                path.display(),
-                c.name,
-                first.name
-            );
+            for kernel in [Kernel::Packet, Kernel::Stream] {
+                assert!(
+                    render(&scene, &c.accel, 125, kernel) == a125,
+                    "{}: {}'s {kernel:?} kernel differs from {}'s single rays at 125x125",
+                    path.display(),
+                    c.name,
+                    first.name
+                );
+            }
         }
     }
     let size = brute_size(&scene);
@@ -197,11 +199,14 @@ fn packets_match_single_rays_with_many_light_samples_and_deep_bounces() {
         .filter(|c| c.same_images())
     {
         for size in [64, 61] {
-            assert!(
-                render(&s, &c.accel, size, Kernel::Packet) == render(&s, &c.accel, size, Kernel::Single),
-                "{}: packet and single-ray kernels differ at {size}x{size}",
-                c.name
-            );
+            let single = render(&s, &c.accel, size, Kernel::Single);
+            for kernel in [Kernel::Packet, Kernel::Stream] {
+                assert!(
+                    render(&s, &c.accel, size, kernel) == single,
+                    "{}: {kernel:?} and single-ray kernels differ at {size}x{size}",
+                    c.name
+                );
+            }
         }
     }
 }

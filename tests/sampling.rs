@@ -221,7 +221,7 @@ fn everything_scene() -> Scene {
     s
 }
 
-/// The same bytes on 1 and 2 threads and with either kernel: every random number comes from
+/// The same bytes on 1 and 2 threads and with every kernel: every random number comes from
 /// (seed, pass, pixel, sample), never from a thread or from the order tiles are taken in.
 #[test]
 fn sampled_renders_are_reproducible_across_threads_and_kernels() {
@@ -242,6 +242,8 @@ fn sampled_renders_are_reproducible_across_threads_and_kernels() {
     assert!(bytes(2, Kernel::Single) == reference, "1 vs 2 threads");
     assert!(bytes(1, Kernel::Packet) == reference, "packet vs single");
     assert!(bytes(2, Kernel::Packet) == reference, "packet on 2 threads");
+    assert!(bytes(1, Kernel::Stream) == reference, "stream vs single");
+    assert!(bytes(2, Kernel::Stream) == reference, "stream on 2 threads");
 }
 
 /// Progressive passes average to what many samples converge to: the regular soft shadow's value within

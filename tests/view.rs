@@ -141,7 +141,7 @@ fn bad_option_values_are_usage_errors() {
         (
             &["--kernel", "simd"],
             "error: invalid value 'simd' for '--kernel <KERNEL>': unknown kernel \"simd\": expected \
-             single or packet",
+             single, packet or stream",
         ),
         (
             &["--threads", "0"],

@@ -26,6 +26,10 @@ pub trait Contestant: Sync {
     fn side(&self) -> Side;
     /// True for a packet kernel (compared with packets in the ratio rows).
     fn packets(&self) -> bool;
+    /// True for a stream kernel (ours only: its rows stand beside the others, outside the ratio rows).
+    fn streams(&self) -> bool {
+        false
+    }
     /// Closest hits of the segments: how many hit.
     fn closest(&self, rays: &[Segment]) -> usize;
     /// Any hit on the segments: how many are blocked.
@@ -44,35 +48,51 @@ pub trait FirstHit {
     fn triangle(&self, ray: &Segment) -> Option<u32>;
 }
 
-/// One of the kit's structures ([`whitted::kit::contestants`]) with its single-ray or its packet
-/// kernel.
+/// Which of a structure's kernels a row times.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verb {
+    /// One ray at a time.
+    Single,
+    /// Packets of 8 consecutive rays.
+    Packets,
+    /// Streams of [`STREAM`] consecutive rays (or of the rays a thread is given, if fewer).
+    Streams,
+}
+
+/// Rays a stream: a batch of the stream kernel's frames (`whitted render --kernel stream` traces at
+/// most 4,096 pixel samples a generation).
+pub const STREAM: usize = 4096;
+
+/// One of the kit's structures ([`whitted::kit::contestants`]) with one of its kernels.
 pub struct Ours<'a> {
     id: String,
     accel: &'a Accel<'a>,
-    packets: bool,
+    verb: Verb,
 }
 
 impl<'a> Ours<'a> {
-    /// `accel` under bench id `id`, with its packet kernel or its single rays.
-    pub fn new(id: &str, accel: &'a Accel<'a>, packets: bool) -> Self {
+    /// `accel` under bench id `id`, with kernel `verb`.
+    pub fn new(id: &str, accel: &'a Accel<'a>, verb: Verb) -> Self {
         Ours {
             id: id.to_string(),
             accel,
-            packets,
+            verb,
         }
     }
 
-    /// Every structure of the kit with its single-ray kernel, and the wide BVHs with their packets too
-    /// (the others answer packets ray by ray: their packet rows would time single rays again). Embree,
-    /// which the kit lists with the `embree` feature, is a peer's: its rows are `embree.rs`'s.
+    /// Every structure of the kit with its single-ray kernel, and the wide BVHs with their packets and
+    /// streams too (the others answer packets and streams ray by ray: their rows would time single
+    /// rays again). Embree, which the kit lists with the `embree` feature, is a peer's: its rows are
+    /// `embree.rs`'s.
     pub fn all(built: &'a [Built<'a>]) -> Vec<Ours<'a>> {
         let mut out = Vec::new();
         for b in built.iter().filter(|b| !b.is_embree()) {
             let id = b.name.replace(' ', "-");
             if b.has_packet_kernel() {
-                out.push(Ours::new(&format!("{id}-packets"), &b.accel, true));
+                out.push(Ours::new(&format!("{id}-packets"), &b.accel, Verb::Packets));
+                out.push(Ours::new(&format!("{id}-streams"), &b.accel, Verb::Streams));
             }
-            out.push(Ours::new(&id, &b.accel, false));
+            out.push(Ours::new(&id, &b.accel, Verb::Single));
         }
         out
     }
@@ -88,32 +108,60 @@ impl Contestant for Ours<'_> {
     }
 
     fn packets(&self) -> bool {
-        self.packets
+        self.verb == Verb::Packets
+    }
+
+    fn streams(&self) -> bool {
+        self.verb == Verb::Streams
     }
 
     fn closest(&self, rays: &[Segment]) -> usize {
-        if self.packets {
-            return packets_of(rays, |r, active, t_max| {
+        match self.verb {
+            Verb::Packets => packets_of(rays, |r, active, t_max| {
                 let mut hits = t_max.map(Hit::miss);
                 self.accel.intersect_packet(r, active, 0.0, &mut hits)
-            });
+            }),
+            Verb::Streams => streams_of(rays, |r, t_max| {
+                let mut hits: Vec<Hit> = t_max.iter().map(|&t| Hit::miss(t)).collect();
+                self.accel.intersect_stream(r, 0.0, &mut hits);
+                hits.iter().filter(|h| h.is_hit()).count()
+            }),
+            Verb::Single => {
+                let mut hits = 0;
+                for (ray, t_max) in rays {
+                    let mut hit = Hit::miss(*t_max);
+                    hits += self.accel.intersect(ray, 0.0, &mut hit) as usize;
+                }
+                hits
+            }
         }
-        let mut hits = 0;
-        for (ray, t_max) in rays {
-            let mut hit = Hit::miss(*t_max);
-            hits += self.accel.intersect(ray, 0.0, &mut hit) as usize;
-        }
-        hits
     }
 
     fn occluded(&self, rays: &[Segment]) -> usize {
-        if self.packets {
-            return packets_of(rays, |r, active, t_max| {
+        match self.verb {
+            Verb::Packets => packets_of(rays, |r, active, t_max| {
                 self.accel.occluded_packet(r, active, 0.0, t_max)
-            });
+            }),
+            Verb::Streams => streams_of(rays, |r, t_max| {
+                let mut blocked = vec![false; r.len()];
+                self.accel.occluded_stream(r, 0.0, t_max, &mut blocked);
+                blocked.iter().filter(|&&b| b).count()
+            }),
+            Verb::Single => rays
+                .iter()
+                .filter(|(ray, t_max)| self.accel.occluded(ray, 0.0, *t_max))
+                .count(),
         }
-        rays.iter()
-            .filter(|(ray, t_max)| self.accel.occluded(ray, 0.0, *t_max))
-            .count()
     }
+}
+
+/// `count` over `rays` in streams of [`STREAM`], each given as its rays and their limits (gathered per
+/// stream, as a renderer holds them; the allocation is per stream, not per ray): the sum.
+fn streams_of(rays: &[Segment], count: impl Fn(&[Ray], &[f32]) -> usize) -> usize {
+    rays.chunks(STREAM)
+        .map(|s| {
+            let (r, t): (Vec<Ray>, Vec<f32>) = s.iter().copied().unzip();
+            count(&r, &t)
+        })
+        .sum()
 }

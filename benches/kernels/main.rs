@@ -1,7 +1,8 @@
 //! Kernel throughput on the dragon workload (`docs/dragon-workload.md`), in Mrays/s through
 //! criterion's throughput: one loop over the contestants × the ray sets × one thread and all of them.
 //! The contestants: every structure of the test kit (`whitted::kit::contestants`) with its single-ray
-//! kernel, the wide BVHs with their packet kernel too (8 consecutive rays a packet), and obvhs 0.4's
+//! kernel, the wide BVHs with their packet kernel (8 consecutive rays a packet) and their stream kernel
+//! (4,096 consecutive rays a stream, or a thread's 256 in the all-threads rows) too, and obvhs 0.4's
 //! CWBVH and BVH2 (`very_slow_build`, its best trees, traced with our triangle test); with
 //! `--features bench-embree`, Embree 3's single rays and 8-wide packets on its high-quality (spatial
 //! split) BVH, through the library's binding (`whitted::accel::embree`); with `--features bench-tinybvh`, tinybvh's BVH8_CPU (needs
@@ -32,7 +33,7 @@ use std::hint::black_box;
 use std::time::SystemTime;
 
 use common::{obvhs as obvhs_build, table};
-use contestant::{Contestant, Ours, Segment, Side};
+use contestant::{Contestant, Ours, Segment, Side, Verb};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use peer::Traced;
 use rayon::prelude::*;
@@ -199,8 +200,8 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     ];
     let ours = Ours::all(&built);
     let brute = Accel::build(prims, AccelKind::None);
-    let brute = Ours::new("brute", &brute, false);
-    let reference_row = Ours::new("grid", reference, false);
+    let brute = Ours::new("brute", &brute, Verb::Single);
+    let reference_row = Ours::new("grid", reference, Verb::Single);
     for set in &mut sets {
         set.hits = set.trace(&reference_row, &set.rays);
         // The reference against brute force on a sample.
@@ -294,7 +295,7 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
         let best = |packets: bool| {
             let mine: Vec<Vec<Option<f64>>> = contestants
                 .iter()
-                .filter(|c| c.side() == Side::Ours && c.packets() == packets)
+                .filter(|c| c.side() == Side::Ours && c.packets() == packets && !c.streams())
                 .map(|c| speed(*c))
                 .collect();
             (0..sets.len())

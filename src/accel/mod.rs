@@ -271,6 +271,53 @@ impl<'a> Accel<'a> {
         }
     }
 
+    /// The closest hit of each ray of `rays` with `t` in `(t_min, hits[i].t)`, into `hits[i]` (a miss
+    /// leaves it as it was): [`Accel::intersect`] for each. The wide BVHs take the rays down the tree
+    /// together, as a stream split at each node (for many rays in any directions: the secondary rays of
+    /// a batch of tiles); the other structures answer ray by ray.
+    pub fn intersect_stream(&self, rays: &[Ray], t_min: f32, hits: &mut [Hit]) {
+        assert_eq!(rays.len(), hits.len(), "a hit per ray");
+        let t_min = ahead(t_min);
+        match self {
+            Accel::Bvh4(b) => with_spare(rays.len(), |_, found| {
+                b.traverse_stream::<Closest>(rays, t_min, hits, found)
+            }),
+            Accel::Bvh8(b) => with_spare(rays.len(), |_, found| {
+                b.traverse_stream::<Closest>(rays, t_min, hits, found)
+            }),
+            _ => {
+                for (ray, hit) in rays.iter().zip(hits) {
+                    self.intersect(ray, t_min, hit);
+                }
+            }
+        }
+    }
+
+    /// Whether each ray of `rays` hits anything with `t` in `(t_min, t_max[i])`, into `occluded[i]`:
+    /// [`Accel::occluded`] for each, as a stream where the structure has a stream kernel.
+    pub fn occluded_stream(&self, rays: &[Ray], t_min: f32, t_max: &[f32], occluded: &mut [bool]) {
+        assert!(
+            t_max.len() == rays.len() && occluded.len() == rays.len(),
+            "a distance and a flag per ray"
+        );
+        let t_min = ahead(t_min);
+        match self {
+            Accel::Bvh4(b) => with_spare(rays.len(), |hits, _| {
+                hits.iter_mut().zip(t_max).for_each(|(h, &t)| *h = Hit::miss(t));
+                b.traverse_stream::<AnyHit>(rays, t_min, hits, occluded)
+            }),
+            Accel::Bvh8(b) => with_spare(rays.len(), |hits, _| {
+                hits.iter_mut().zip(t_max).for_each(|(h, &t)| *h = Hit::miss(t));
+                b.traverse_stream::<AnyHit>(rays, t_min, hits, occluded)
+            }),
+            _ => {
+                for ((ray, &t_max), occluded) in rays.iter().zip(t_max).zip(occluded) {
+                    *occluded = self.occluded(ray, t_min, t_max);
+                }
+            }
+        }
+    }
+
     /// The mask of the rays of `rays` in `active` that hit anything with `t` in `(t_min, t_max[k])`:
     /// [`Accel::occluded`] for each, as a packet where the structure has a packet kernel.
     #[inline]
@@ -284,4 +331,19 @@ impl<'a> Accel<'a> {
             _ => packet::ray_by_ray(active, |k| self.occluded(&rays[k], t_min, t_max[k])),
         }
     }
+}
+
+thread_local! {
+    /// A worker's spare hits and flags for the stream verbs (what the kernel fills that the verb does
+    /// not hand back), kept from stream to stream.
+    static SPARE: std::cell::RefCell<(Vec<Hit>, Vec<bool>)> = Default::default();
+}
+
+/// Runs `f` on `n` spare hits and flags of this worker (their values left from earlier streams).
+fn with_spare<R>(n: usize, f: impl FnOnce(&mut [Hit], &mut [bool]) -> R) -> R {
+    SPARE.with_borrow_mut(|(hits, found)| {
+        hits.resize(n, Hit::miss(0.0));
+        found.resize(n, false);
+        f(hits, found)
+    })
 }

@@ -9,7 +9,7 @@ use serde_json::{Map, Value, json};
 use whitted::accel::{Accel, Simd};
 use whitted::render::progressive::Progressive;
 use whitted::render::spd::{self, Counts};
-use whitted::render::{Kernel, Options, RayCounts};
+use whitted::render::{Options, RayCounts};
 
 use super::plan::Plan;
 use super::render::RenderArgs;
@@ -148,7 +148,7 @@ impl Report {
     /// Lines for people: what ran, the times, the rays by kind with their rates, and the SPD counts.
     pub fn text(&self) -> String {
         let (w, h) = self.size();
-        let kernel = kernel_name(self.options.kernel);
+        let kernel = self.options.kernel.name();
         let (accel, simd, threads) = (self.accel, self.simd, self.threads);
         let mut out = format!(
             "whitted {VERSION}: {}, {w}x{h}, spp {}, depth {}, {accel} ({simd}), {kernel} kernel, {threads} threads\n",
@@ -199,7 +199,7 @@ impl Report {
             "max_depth": self.options.max_depth,
             "accel": self.accel,
             "simd": self.simd,
-            "kernel": kernel_name(self.options.kernel),
+            "kernel": self.options.kernel.name(),
             "threads": self.threads,
             "passes": self.passes,
             "load_s": load,
@@ -250,14 +250,6 @@ pub fn simd_name(accel: &Accel) -> &'static str {
         Some(Simd::Avx2) => "avx2",
         Some(Simd::Portable) => "portable",
         None => "scalar",
-    }
-}
-
-/// What a kernel is called on the command line.
-pub fn kernel_name(kernel: Kernel) -> &'static str {
-    match kernel {
-        Kernel::Single => "single",
-        Kernel::Packet => "packet",
     }
 }
 
@@ -344,6 +336,7 @@ fn spd_json(ours: &Counts, readme: Option<&Counts>) -> Value {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use whitted::render::Kernel;
 
     /// A report of made-up figures whose rates are exact: 0.5 s of render.
     fn report(spd: bool) -> Report {

@@ -9,6 +9,7 @@
 //! shadows) and its own random numbers for fuzzy reflections ([`super::sampler`]); progressive rendering
 //! averages passes of one such sample ([`super::progressive`]).
 
+use std::cell::RefCell;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::{Vec2, Vec3};
@@ -20,6 +21,7 @@ use super::film::Film;
 use super::options::{Kernel, Options};
 use super::packets::PerRay;
 use super::sampler::{PixelPattern, Sampler};
+use super::streams::{STREAM_TILES, StreamBuffers};
 use super::tiles::{self, TILE, Tile};
 use super::whitted::{PixelSample, RayCounts, Whitted};
 use crate::accel::Accel;
@@ -258,18 +260,20 @@ impl<'a> Renderer<'a> {
         // idle worker can steal. Measured on dragon.p3f, 2 threads: 224 ms a frame with the adaptive
         // split, as slow as giving each thread a fixed half of the image, and 160 ms with one tile a
         // job, as fast as two threads on interleaved tiles (one thread: 315 ms).
-        let tiles = tiles
-            .par_iter()
-            .with_max_len(1)
-            .map(|&tile| {
-                if stop.load(Ordering::Relaxed) {
-                    return None;
-                }
-                let mut buf = [Vec3::ZERO; (TILE * TILE) as usize];
-                let mut rays = RayCounts::default();
-                match self.options.kernel {
-                    Kernel::Packet => self.tile_packets(tile, pass, &mut buf, &mut rays),
-                    Kernel::Single => {
+        let tiles = match self.options.kernel {
+            Kernel::Stream => self.stream_tiles(pass, tiles, on_tile, stop),
+            kernel => tiles
+                .par_iter()
+                .with_max_len(1)
+                .map(|&tile| {
+                    if stop.load(Ordering::Relaxed) {
+                        return None;
+                    }
+                    let mut buf = [Vec3::ZERO; (TILE * TILE) as usize];
+                    let mut rays = RayCounts::default();
+                    if kernel == Kernel::Packet {
+                        self.tile_packets(tile, pass, &mut buf, &mut rays);
+                    } else {
                         let mut pattern = PixelPattern::default();
                         for y in tile.y0..tile.y1 {
                             for x in tile.x0..tile.x1 {
@@ -278,12 +282,47 @@ impl<'a> Renderer<'a> {
                             }
                         }
                     }
+                    on_tile();
+                    Some((tile, buf, rays))
+                })
+                .collect(),
+        };
+        TilePass { tiles }
+    }
+
+    /// [`Renderer::render_tiles`] with [`Kernel::Stream`]: [`STREAM_TILES`] tiles a rayon job, traced
+    /// together as streams, each worker with its own buffers kept from job to job.
+    fn stream_tiles(
+        &self,
+        pass: u32,
+        tiles: &[Tile],
+        on_tile: &(dyn Fn() + Sync),
+        stop: &AtomicBool,
+    ) -> Vec<Option<TileDone>> {
+        thread_local! {
+            static BUFFERS: RefCell<StreamBuffers> = RefCell::default();
+        }
+        let done: Vec<Vec<Option<TileDone>>> = tiles
+            .par_chunks(STREAM_TILES)
+            .with_max_len(1)
+            .map(|set| {
+                if stop.load(Ordering::Relaxed) {
+                    return vec![None; set.len()];
                 }
-                on_tile();
-                Some((tile, buf, rays))
+                let mut bufs = vec![[Vec3::ZERO; (TILE * TILE) as usize]; set.len()];
+                let mut counts = vec![RayCounts::default(); set.len()];
+                BUFFERS.with_borrow_mut(|b| self.tiles_streamed(set, pass, &mut bufs, &mut counts, b));
+                set.iter()
+                    .zip(bufs)
+                    .zip(counts)
+                    .map(|((&tile, buf), rays)| {
+                        on_tile();
+                        Some((tile, buf, rays))
+                    })
+                    .collect()
             })
             .collect();
-        TilePass { tiles }
+        done.into_iter().flatten().collect()
     }
 
     /// Shades `tile` for pass `pass`, packet by packet (pixels outside the image are inactive lanes),

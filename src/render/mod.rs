@@ -9,7 +9,8 @@
 //!   [`light`], each behind a shadow ray, [`crate::accel::Accel::occluded`]) and recurses into the
 //!   reflected and refracted rays ([`optics`]); a ray that leaves the scene sees the background
 //!   ([`env`](mod@env)). With [`Kernel::Packet`], [`packets`] does the same for eight neighbouring pixels at a
-//!   time through the accelerators' packet verbs;
+//!   time through the accelerators' packet verbs; with [`Kernel::Stream`], `streams` for the pixel
+//!   samples of a few tiles at a time, generation by generation, through their stream verbs;
 //! - the colours land in a linear [`film::Film`], or in a [`progressive::Progressive`] sum of passes,
 //!   written as an image at the end (or as a `.partial` part of a frame, [`crate::parts`]).
 
@@ -25,6 +26,7 @@ pub mod packets;
 pub mod progressive;
 pub mod sampler;
 pub mod spd;
+mod streams;
 pub mod tiles;
 pub mod whitted;
 

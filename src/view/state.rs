@@ -68,7 +68,7 @@ pub enum Key {
     Reset,
     /// 1 to 5 (6: Embree, with the `embree` feature): the accelerator.
     Accel(AccelKind),
-    /// K: single rays or packets.
+    /// K: single rays, packets, streams, in turn.
     Kernel,
     /// H: soft shadows (sampled quad lights) or the quad lights' regular grids.
     SoftShadows,
@@ -329,12 +329,7 @@ impl ViewState {
             // A jump, not a motion: the resolution stays as it is.
             Key::Reset => (self.from, self.at, self.fov_y) = (self.file.from, self.file.at, self.file.fov_y),
             Key::Accel(kind) => s.accel = kind,
-            Key::Kernel => {
-                s.kernel = match s.kernel {
-                    Kernel::Single => Kernel::Packet,
-                    Kernel::Packet => Kernel::Single,
-                }
-            }
+            Key::Kernel => s.kernel = s.kernel.next(),
             Key::SoftShadows => s.soft_shadows = !s.soft_shadows,
             Key::DepthOfField => s.depth_of_field = !s.depth_of_field,
             Key::LessDepth => s.max_depth = s.max_depth.saturating_sub(1),

@@ -32,7 +32,6 @@ use super::state::{Input, Job, Key, Settings, ViewState};
 use super::{Config, Frame, Signals, render_loop, reproduce};
 use crate::accel::AccelKind;
 use crate::error::{Error, Result};
-use crate::render::Kernel;
 use crate::scene::Scene;
 
 /// How often the camera moves while keys are held: the screen's usual rate.
@@ -460,10 +459,7 @@ fn title(name: &str, frame: &Frame, progressive: bool) -> String {
     let fps = 1.0 / frame.seconds.max(1e-9);
     let mrays = frame.rays.total() as f64 / frame.seconds.max(1e-9) / 1e6;
     let accel = format!("{:?}", job.accel).to_lowercase();
-    let kernel = match job.options.kernel {
-        Kernel::Single => "single",
-        Kernel::Packet => "packet",
-    };
+    let kernel = job.options.kernel.name();
     let scale = match job.scale {
         1 => "full".to_string(),
         s => format!("1/{s}"),

@@ -623,20 +623,23 @@ impl<V> SlabRays<V> {
     where
         V: Lanes<N>,
     {
-        let inv = safe_inverse(ray.dir);
-        let inv_far = inv * SLAB_ROBUST;
+        Self::one(&SlabRay::new::<N, V>(ray))
+    }
+
+    /// One ray prepared beforehand ([`SlabRay`]) in every lane.
+    #[inline(always)]
+    pub fn one<const N: usize>(r: &SlabRay) -> Self
+    where
+        V: Lanes<N>,
+    {
         let lanes = |v: Vec3| [V::splat(v.x), V::splat(v.y), V::splat(v.z)];
-        let (mut shift, mut shift_far) = (Vec3::ZERO, Vec3::ZERO);
-        for a in 0..3 {
-            (shift[a], shift_far[a]) = shifts::<N, V>(ray.origin[a], inv[a], inv_far[a]);
-        }
         SlabRays {
-            inv: lanes(inv),
-            inv_far: lanes(inv_far),
-            shift: lanes(shift),
-            shift_far: lanes(shift_far),
+            inv: lanes(r.inv),
+            inv_far: lanes(r.inv_far),
+            shift: lanes(r.shift),
+            shift_far: lanes(r.shift_far),
             negative: [V::splat(0.0); 3],
-            flip: [inv.x < 0.0, inv.y < 0.0, inv.z < 0.0],
+            flip: [r.inv.x < 0.0, r.inv.y < 0.0, r.inv.z < 0.0],
             mixed: false,
         }
     }
@@ -679,6 +682,36 @@ impl<V> SlabRays<V> {
             ],
             flip: [negative[0] != 0, negative[1] != 0, negative[2] != 0],
             mixed: negative.iter().any(|&m| m != 0 && m != live),
+        }
+    }
+}
+
+/// One ray's slab-test values as plain numbers ([`SlabRays`] before they are splatted): 48 bytes a ray,
+/// where the splatted lanes take 480, for the stream kernel to keep one per ray of its stream and splat
+/// at each node test (the division of the inverse is then once per ray, not once per node).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct SlabRay {
+    inv: Vec3,
+    inv_far: Vec3,
+    shift: Vec3,
+    shift_far: Vec3,
+}
+
+impl SlabRay {
+    /// `ray` prepared for the slab tests of lanes `V`.
+    #[inline(always)]
+    pub fn new<const N: usize, V: Lanes<N>>(ray: &Ray) -> Self {
+        let inv = safe_inverse(ray.dir);
+        let inv_far = inv * SLAB_ROBUST;
+        let (mut shift, mut shift_far) = (Vec3::ZERO, Vec3::ZERO);
+        for a in 0..3 {
+            (shift[a], shift_far[a]) = shifts::<N, V>(ray.origin[a], inv[a], inv_far[a]);
+        }
+        SlabRay {
+            inv,
+            inv_far,
+            shift,
+            shift_far,
         }
     }
 }

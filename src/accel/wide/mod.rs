@@ -3,8 +3,8 @@
 //! depth-first into one array. Each node keeps its children's boxes as structure of arrays, so one
 //! `W`-lane slab test answers all of them at once.
 //!
-//! One structure, one collapse, one single-ray kernel (`traverse.rs`) and one packet kernel
-//! (`packet.rs`) serve both widths: [`Bvh4`] (4 lanes of SSE, the default where the CPU lacks AVX2) and
+//! One structure, one collapse, one single-ray kernel (`traverse.rs`), one packet kernel (`packet.rs`)
+//! and one stream kernel (`stream.rs`) serve both widths: [`Bvh4`] (4 lanes of SSE, the default where the CPU lacks AVX2) and
 //! [`Bvh8`] (8 lanes: one AVX2 register where the CPU has AVX2, detected at run time, else two SSE
 //! halves). Both kernels test boxes with the one slab test of `lanes.rs`, on the lane type of the
 //! instruction set chosen there. Wider nodes mean fewer node visits and fewer stack operations per
@@ -13,10 +13,12 @@
 mod collapse;
 mod lanes;
 mod packet;
+mod stream;
 mod traverse;
 pub mod tri4;
 
 pub use lanes::Simd;
+pub use stream::STREAM_MIN;
 
 use glam::Vec3;
 

@@ -113,19 +113,35 @@ impl<const W: usize> WideBvh<'_, W> {
         if (P::ANY && found) || self.root == EMPTY {
             return found;
         }
-        let r = SlabRays::<L>::splat(ray);
+        self.descend::<P, L, T>(self.root, ray, &SlabRays::splat(ray), t_min, hit, &mut found) || found
+    }
+
+    /// The single-ray traversal of the subtree under `start` (not [`EMPTY`]) for `ray`, prepared as
+    /// `r`, with `t_min` already [`ahead`]: sets `found` on a hit and returns true if the search is over
+    /// (any-hit found one). [`WideBvh::single`] starts it at the root, the stream kernel wherever its
+    /// stream has thinned to a ray or two.
+    #[inline(always)]
+    pub(super) fn descend<P: HitPolicy, L: Lanes<W>, T: Lanes8>(
+        &self,
+        start: ChildRef,
+        ray: &Ray,
+        r: &SlabRays<L>,
+        t_min: f32,
+        hit: &mut Hit,
+        found: &mut bool,
+    ) -> bool {
         let mut stack = Stack::<Visit, STACK>::new();
-        let mut current = self.root;
+        let mut current = start;
         loop {
             if current & LEAF != 0 {
-                if self.leaf::<P, T>(current, ray, t_min, hit, &mut found) {
+                if self.leaf::<P, T>(current, ray, t_min, hit, found) {
                     return true;
                 }
             } else {
                 let node = &self.nodes[current as usize];
                 let plane =
                     |axis: usize, max: bool| L::load(if max { &node.max[axis] } else { &node.min[axis] });
-                let (lanes, mut mask) = slab(&r, plane, L::splat(t_min), L::splat(hit.t * CULL_MARGIN));
+                let (lanes, mut mask) = slab(r, plane, L::splat(t_min), L::splat(hit.t * CULL_MARGIN));
                 let t = lanes.to_array();
                 let entered = mask;
                 if mask != 0 {
@@ -181,7 +197,7 @@ impl<const W: usize> WideBvh<'_, W> {
             // Pop the next subtree that may still hold a closer hit.
             loop {
                 let Some(Visit { child, t }) = stack.pop() else {
-                    return found;
+                    return false;
                 };
                 if P::ANY || t <= hit.t * CULL_MARGIN {
                     current = child;
