@@ -28,6 +28,12 @@ pub fn bits(mask: u8) -> impl Iterator<Item = usize> {
     })
 }
 
+/// The mask of a packet's first `n` rays (`n` at most [`PACKET`]).
+#[inline(always)]
+pub fn first(n: usize) -> u8 {
+    (1u16 << n).wrapping_sub(1) as u8
+}
+
 /// The mask of the rays in `active` for which `answer` is true: a packet answered ray by ray.
 #[inline]
 pub(super) fn ray_by_ray(active: u8, mut answer: impl FnMut(usize) -> bool) -> u8 {

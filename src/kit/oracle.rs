@@ -14,8 +14,9 @@ use rayon::prelude::*;
 
 use super::contestants::Contestant;
 use super::rays::Case;
+use crate::accel::packet::{self, bits};
 use crate::accel::wide::STREAM_MIN;
-use crate::accel::{Accel, AccelKind, Hit, PACKET, PrimKind, Prims, packet::bits};
+use crate::accel::{Accel, AccelKind, Hit, PACKET, PrimKind, Prims};
 use crate::geometry::ray::Ray;
 
 /// How closely a structure's closest hits must match the reference's.
@@ -348,7 +349,7 @@ pub fn check_packets(
         for (k, &i) in ids.iter().enumerate() {
             (rays[k], t_max[k]) = (cases[i].ray, cases[i].t_max);
         }
-        let all = (1u16 << ids.len()).wrapping_sub(1) as u8;
+        let all = packet::first(ids.len());
         let active = all & if ids.len() > 2 { !2 } else { 0xff };
         let mut hits: [Hit; PACKET] = std::array::from_fn(|k| match active >> k & 1 {
             1 => Hit::miss(t_max[k]),

@@ -7,7 +7,7 @@ use glam::Vec3;
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
-use crate::accel::{Accel, Hit, PACKET, Prims};
+use crate::accel::{Accel, Hit, PACKET, Prims, packet};
 use crate::geometry::ray::Ray;
 use crate::render::camera::RayCamera;
 use crate::scene::Scene;
@@ -45,7 +45,7 @@ pub fn packets_of(
         for (k, (ray, t_max)) in chunk.iter().enumerate() {
             (r[k], t[k]) = (*ray, *t_max);
         }
-        let active = (1u16 << chunk.len()).wrapping_sub(1) as u8;
+        let active = packet::first(chunk.len());
         found += trace(&r, active, &t).count_ones() as usize;
     }
     found

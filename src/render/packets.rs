@@ -104,13 +104,7 @@ impl Whitted<'_> {
         depth: u32,
         samples: &mut PerRay<PixelSample>,
     ) -> PerRay<Vec3> {
-        let octant = |r: &Ray| r.dir.cmplt(Vec3::ZERO).bitmask();
-        let mut live = bits(mask);
-        let coherent = match live.next() {
-            Some(first) => live.all(|k| octant(&rays[k]) == octant(&rays[first])),
-            None => true,
-        };
-        if coherent && mask.count_ones() >= MIN_LANES {
+        if coherent(bits(mask).map(|k| &rays[k])) {
             return self.shade_packet(rays, mask, depth, samples);
         }
         let mut out = [Vec3::ZERO; PACKET];
@@ -154,4 +148,21 @@ impl Whitted<'_> {
         }
         blocked
     }
+}
+
+/// Whether `rays` (up to a packet's worth) are worth tracing as a packet: at least [`MIN_LANES`] of
+/// them, their directions all in one octant. The packet and stream drivers both group by this rule.
+pub(super) fn coherent<'r>(mut rays: impl Iterator<Item = &'r Ray>) -> bool {
+    let octant = |r: &Ray| r.dir.cmplt(Vec3::ZERO).bitmask();
+    let Some(first) = rays.next().map(octant) else {
+        return false;
+    };
+    let mut n = 1;
+    for r in rays {
+        if octant(r) != first {
+            return false;
+        }
+        n += 1;
+    }
+    n >= MIN_LANES
 }

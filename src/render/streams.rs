@@ -16,9 +16,11 @@
 use glam::Vec3;
 
 use super::frame::Renderer;
+use super::packets::coherent;
 use super::sampler::PixelPattern;
 use super::tiles::{TILE, Tile};
 use super::whitted::{Bounces, PixelSample, RayCounts, ShadowRay};
+use crate::accel::packet::first;
 use crate::accel::{Hit, PACKET, Surface};
 use crate::geometry::ray::Ray;
 
@@ -32,10 +34,6 @@ pub(super) const STREAM_TILES: usize = 4;
 /// traced in batches of whole pixels' samples, so that a worker's state stays bounded (about 130 bytes
 /// a sample and 200 a pending ray: a few MiB at most).
 const BATCH: usize = 4096;
-
-/// Chunks of fewer rays than this go into the stream: a packet's node tests cost about as much for one
-/// ray as for eight (the packet kernel's own rule, `super::packets`).
-const MIN_LANES: usize = 2;
 
 /// Width of a block of pixels whose camera rays make a packet (and `PACKET / BLOCK_W` rows).
 const BLOCK_W: usize = 4;
@@ -55,7 +53,7 @@ struct Node {
     /// The ray that spawned it, and which of that ray's children it is (0 refracted, 1 reflected).
     parent: u32,
     slot: u8,
-    hit: Hit,
+    /// Where its closest hit lies (`None`: it left the scene).
     surface: Option<Surface>,
     bounces: Bounces,
     /// Its shadow rays' answers, from here on in the batch's list, in light order.
@@ -207,13 +205,13 @@ impl Renderer<'_> {
             b.shadow_light.clear();
             for (j, &n) in b.queue.iter().enumerate() {
                 let node = &mut b.nodes[n as usize];
-                node.hit = b.hits[j];
-                if !node.hit.is_hit() {
+                let hit = b.hits[j];
+                if !hit.is_hit() {
                     continue;
                 }
                 let walk = &mut walks[node.sample as usize];
                 walk.sample.rays.primary_hits += u64::from(node.depth == 0);
-                let s = whitted.prims.surface(&node.ray, &node.hit);
+                let s = whitted.prims.surface(&node.ray, &hit);
                 node.bounces = whitted.bounces(&node.ray, &s, node.depth, &mut walk.sample);
                 walk.sample.rays.add_bounces(&node.bounces);
                 node.surface = Some(s);
@@ -244,18 +242,16 @@ impl Renderer<'_> {
 
     /// Traces the rays of `b.order`, run by run (`b.runs`: where each ends): the generation's rays
     /// (closest hits into `b.hits`) or, with `ANY`, its shadow rays (answers into `b.blocked` from
-    /// `start` on). Each run is cut into chunks of eight; a chunk of at least [`MIN_LANES`] rays of one
-    /// octant is traced as a packet, the others' rays together as one stream.
+    /// `start` on). Each run is cut into chunks of eight; a chunk that is [`coherent`] is traced as a
+    /// packet (the packet driver's rule), the others' rays together as one stream.
     fn trace_split<const ANY: bool>(&self, b: &mut StreamBuffers, start: usize) {
         let accel = self.whitted.accel;
         let rays = if ANY { &b.shadow_rays } else { &b.rays };
-        let octant = |j: u32| rays[j as usize].dir.cmplt(Vec3::ZERO).bitmask();
         b.stream.clear();
         let mut from = 0;
         for &end in &b.runs {
             for ids in b.order[from as usize..end as usize].chunks(PACKET) {
-                let first = octant(ids[0]);
-                if ids.len() < MIN_LANES || ids[1..].iter().any(|&j| octant(j) != first) {
+                if !coherent(ids.iter().map(|&j| &rays[j as usize])) {
                     b.stream.extend_from_slice(ids);
                     continue;
                 }
@@ -266,13 +262,13 @@ impl Renderer<'_> {
                 if ANY {
                     let t_max: [f32; PACKET] =
                         std::array::from_fn(|k| ids.get(k).map_or(0.0, |&j| b.shadow_t[j as usize]));
-                    let blocked = accel.occluded_packet(&packet, lanes(ids.len()), 0.0, &t_max);
+                    let blocked = accel.occluded_packet(&packet, first(ids.len()), 0.0, &t_max);
                     for (k, &j) in ids.iter().enumerate() {
                         b.blocked[start + j as usize] = blocked >> k & 1 == 1;
                     }
                 } else {
                     let mut hits = [Hit::miss(f32::INFINITY); PACKET];
-                    accel.intersect_packet(&packet, lanes(ids.len()), 0.0, &mut hits);
+                    accel.intersect_packet(&packet, first(ids.len()), 0.0, &mut hits);
                     for (k, &j) in ids.iter().enumerate() {
                         b.hits[j as usize] = hits[k];
                     }
@@ -325,7 +321,10 @@ impl Renderer<'_> {
             // Read in place, not copied: a node is some 200 bytes.
             let walk = &mut walks[sample as usize];
             let color = match &node.surface {
-                None => self.whitted.shade(&node.ray, &node.hit, depth, &mut walk.sample),
+                // A miss: what the ray sees leaving the scene.
+                None => self
+                    .whitted
+                    .shade(&node.ray, &Hit::miss(f32::INFINITY), depth, &mut walk.sample),
                 Some(s) => {
                     let (mut shadow, blocked) = (node.shadows, &b.blocked);
                     self.whitted.shade_surface(
@@ -377,11 +376,6 @@ fn by_light(b: &mut StreamBuffers) {
     }
 }
 
-/// The mask of the first `n` lanes of a packet.
-fn lanes(n: usize) -> u8 {
-    (1u16 << n).wrapping_sub(1) as u8
-}
-
 /// The root node of sample `sample`'s tree: its camera ray (or a child's ray, the rest filled in).
 fn root(ray: Ray, sample: u32) -> Node {
     Node {
@@ -390,7 +384,6 @@ fn root(ray: Ray, sample: u32) -> Node {
         sample,
         parent: NONE,
         slot: 0,
-        hit: Hit::miss(f32::INFINITY),
         surface: None,
         bounces: Bounces::default(),
         shadows: 0,

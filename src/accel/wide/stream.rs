@@ -175,14 +175,14 @@ impl<const W: usize> WideBvh<'_, W> {
             }
             entries.truncate(live);
             if live - start < STREAM_MIN || child & LEAF != 0 {
-                for e in entries.drain(start..) {
-                    let i = e.ray as usize;
-                    let (ray, hit, found) = (&rays[i], &mut hits[i], &mut found[i]);
-                    if child & LEAF != 0 {
-                        self.leaf::<P, T>(child, ray, t_min, hit, found);
-                    } else {
+                if child & LEAF != 0 {
+                    for i in entries.drain(start..).map(|e| e.ray as usize) {
+                        self.leaf::<P, T>(child, &rays[i], t_min, &mut hits[i], &mut found[i]);
+                    }
+                } else {
+                    for i in entries.drain(start..).map(|e| e.ray as usize) {
                         let r = SlabRays::<L>::one(&prepared[i]);
-                        self.descend::<P, L, T>(child, ray, &r, t_min, hit, found);
+                        self.descend::<P, L, T>(child, &rays[i], &r, t_min, &mut hits[i], &mut found[i]);
                     }
                 }
                 continue;
