@@ -9,7 +9,11 @@
 //! truncated input differs from the whole one too. Not cryptographic: it guards against accidents
 //! (a corrupt file, a part of another scene), not against forgery.
 
+/// SplitMix64's increment, the golden ratio's fraction (Steele, Lea, Flood 2014).
+pub const SPLITMIX_STEP: u64 = 0x9e37_79b9_7f4a_7c15;
+
 /// SplitMix64's finaliser: a bijective 64-bit mix with full avalanche.
+#[inline]
 pub fn mix(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
@@ -32,9 +36,9 @@ impl Default for Digest {
 impl Digest {
     /// An empty digest.
     pub fn new() -> Self {
-        // Any non-zero start will do; this one is the golden ratio's fraction, SplitMix's increment.
+        // Any non-zero start will do.
         Digest {
-            state: 0x9e37_79b9_7f4a_7c15,
+            state: SPLITMIX_STEP,
             len: 0,
         }
     }

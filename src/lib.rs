@@ -6,18 +6,8 @@
 //! tile on rayon and shades them with Whitted's model (Whitted 1980) into a linear
 //! [`render::film::Film`], written as an 8-bit PNG (or EXR) at the end.
 //!
-//! Where a ray goes, from the camera to the film: `render/frame.rs` makes a tile's camera rays (one
-//! per pixel sample, `render/camera.rs`, `render/sampler.rs`) and hands them, one at a time or eight
-//! neighbouring pixels at a time, to the Whitted integrator (`render/whitted.rs`, its packet twin
-//! `render/packets.rs`). The integrator asks the accelerator for the closest hit
-//! ([`accel::Accel::intersect`] / [`accel::Accel::intersect_packet`]); a wide BVH answers with its
-//! single-ray or packet kernel (`accel/wide/traverse.rs`, `accel/wide/packet.rs`), whose box tests are
-//! the one slab test of `accel/wide/lanes.rs` on the instruction set chosen at run time, and whose
-//! leaves test four triangles at once (`accel/wide/tri4.rs`). The hit becomes a surface
-//! ([`accel::Prims::surface`]); its shadow rays go to [`accel::Accel::occluded`] (or
-//! `occluded_packet`), its reflected and refracted rays back to the integrator, and the colour lands
-//! in the tile's pixels, then in the [`render::film::Film`] (or a [`render::progressive::Progressive`]
-//! sum of passes).
+//! The layout of the crate, folder by folder, and the path of a ray from the camera to the film are
+//! described once, in `docs/architecture.md`.
 //!
 //! Load a scene, build an accelerator, render:
 //!

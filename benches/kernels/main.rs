@@ -39,8 +39,8 @@ use peer::Traced;
 use rayon::prelude::*;
 use whitted::accel::{Accel, AccelKind, Hit, PrimKind, Prims};
 use whitted::geometry::ray::Ray;
+use whitted::kit::agreement::edge_margin;
 use whitted::kit::contestants as kit;
-use whitted::kit::oracle::edge_margin;
 use whitted::kit::workload::{self, Workload};
 
 /// Rays of each set that brute force traces (it tests all 871k triangles per ray).
@@ -152,7 +152,7 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     let scene = whitted::scene::load(path).expect("the bench scene loads");
     let prims = Prims::new(&scene);
     let built = kit::all(prims);
-    // The reference: the grid, brute force's answer bit for bit (`tests/accel_vs_brute.rs`).
+    // The reference: the grid, brute force's answer bit for bit (`tests/accel/accel_vs_brute.rs`).
     let reference = &built
         .iter()
         .find(|b| b.is_grid())

@@ -2,6 +2,7 @@
 
 use super::policy::HitPolicy;
 use super::prims::{Hit, Prims};
+use super::structure::Structure;
 use crate::geometry::ray::Ray;
 
 /// Tests all primitives, in id order.
@@ -26,5 +27,20 @@ impl<'a> Brute<'a> {
     pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
         self.prims
             .intersect_each::<P>(0..self.prims.total(), ray, t_min, hit)
+    }
+}
+
+impl<'a> Structure<'a> for Brute<'a> {
+    fn prims(&self) -> Prims<'a> {
+        self.prims
+    }
+
+    fn describe(&self) -> String {
+        "brute force: every primitive for every ray".to_string()
+    }
+
+    #[inline]
+    fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        Brute::traverse::<P>(self, ray, t_min, hit)
     }
 }

@@ -1,7 +1,9 @@
 //! Accelerators. Each answers the same two questions (as tinybvh does on every layout): the closest hit
-//! along a ray (`intersect`) and whether anything lies on a segment (`occluded`), for one ray or for a
-//! packet of eight (`intersect_packet`, `occluded_packet`); that shared interface is what lets every
-//! structure be checked against brute force with one loop, and lets the renderer send packets without
+//! along a ray and whether anything lies on a segment, for one ray (`intersect`, `occluded`), a packet
+//! of eight (`intersect_packet`, `occluded_packet`) or a stream of any number (`intersect_stream`,
+//! `occluded_stream`): six verbs, dispatched in one place over the [`Structure`] trait, whose packet
+//! and stream verbs default to ray by ray. That shared interface is what lets every structure be
+//! checked against brute force with one loop, and lets the renderer send packets and streams without
 //! knowing which structure answers them.
 
 pub mod brute;
@@ -14,13 +16,15 @@ pub mod pages;
 pub mod policy;
 pub mod prims;
 pub mod stack;
+pub mod structure;
 pub mod wide;
 
 use std::str::FromStr;
 
 pub use packet::{HitPacket, PACKET, RayPacket};
 pub use prims::{Hit, PrimKind, Prims, Surface};
-pub use wide::Simd;
+pub use structure::Structure;
+pub use wide::Isa;
 
 use crate::geometry::ray::{Ray, ahead};
 use brute::Brute;
@@ -73,7 +77,7 @@ impl AccelKind {
     /// The fastest structure on this CPU (measured on the dragon scenes): the BVH8 where the CPU has
     /// AVX2 for its slab test, else the BVH4 (whose 4-wide test is native SSE everywhere).
     pub fn best() -> AccelKind {
-        if Simd::Avx2.available() {
+        if Isa::Avx2.available() {
             AccelKind::Bvh8
         } else {
             AccelKind::Bvh4
@@ -120,6 +124,22 @@ pub enum Accel<'a> {
     /// Embree 3's BVH over the bounded primitives, the planes beside it.
     #[cfg(feature = "embree")]
     Embree(embree::Embree<'a>),
+}
+
+/// `$body` with `$s` bound to the structure inside `$accel`, whichever it is: the one place that
+/// lists the structures, so that each verb is one line and a new structure one more arm here.
+macro_rules! each {
+    ($accel:expr, $s:ident => $body:expr) => {
+        match $accel {
+            Accel::Brute($s) => $body,
+            Accel::Grid($s) => $body,
+            Accel::Bvh2($s) => $body,
+            Accel::Bvh4($s) => $body,
+            Accel::Bvh8($s) => $body,
+            #[cfg(feature = "embree")]
+            Accel::Embree($s) => $body,
+        }
+    };
 }
 
 impl<'a> Accel<'a> {
@@ -170,42 +190,22 @@ impl<'a> Accel<'a> {
     /// A one-line description of the built structure: node count, depth, leaf sizes and SAH cost for the
     /// BVHs, resolution and references for the grid.
     pub fn describe(&self) -> String {
-        match self {
-            Accel::Brute(_) => "brute force: every primitive for every ray".to_string(),
-            Accel::Grid(g) => g.stats().to_string(),
-            Accel::Bvh2(b) => format!("bvh2: {}", b.stats()),
-            Accel::Bvh4(b) => format!("bvh4: {}", b.stats()),
-            Accel::Bvh8(b) => format!("bvh8 ({:?} slab tests): {}", b.simd(), b.stats()),
-            #[cfg(feature = "embree")]
-            Accel::Embree(e) => e.describe(),
-        }
+        each!(self, s => Structure::describe(s))
     }
 
     /// The scene's primitives the structure was built over.
     pub fn prims(&self) -> Prims<'a> {
-        match self {
-            Accel::Brute(b) => b.prims(),
-            Accel::Grid(g) => g.prims(),
-            Accel::Bvh2(b) => *b.prims(),
-            Accel::Bvh4(b) => b.prims(),
-            Accel::Bvh8(b) => b.prims(),
-            #[cfg(feature = "embree")]
-            Accel::Embree(e) => e.prims(),
-        }
+        each!(self, s => Structure::prims(s))
     }
 
     /// True for the structures that trace a packet's rays together: the wide BVHs and Embree (the
     /// others answer a packet ray by ray).
     pub fn has_packet_kernel(&self) -> bool {
-        match self {
-            #[cfg(feature = "embree")]
-            Accel::Embree(_) => true,
-            _ => self.simd().is_some(),
-        }
+        each!(self, s => Structure::has_packet_kernel(s))
     }
 
     /// The wide BVHs' instruction set; `None` for the other structures.
-    pub fn simd(&self) -> Option<Simd> {
+    pub fn simd(&self) -> Option<Isa> {
         match self {
             Accel::Bvh4(b) => Some(b.simd()),
             Accel::Bvh8(b) => Some(b.simd()),
@@ -215,7 +215,7 @@ impl<'a> Accel<'a> {
 
     /// Makes a wide BVH use `simd` (tests and benchmarks compare the paths); false, with nothing
     /// changed, when the CPU lacks it or the structure has no such choice.
-    pub fn set_simd(&mut self, simd: Simd) -> bool {
+    pub fn set_simd(&mut self, simd: Isa) -> bool {
         match self {
             Accel::Bvh4(b) => b.set_simd(simd),
             Accel::Bvh8(b) => b.set_simd(simd),
@@ -228,30 +228,14 @@ impl<'a> Accel<'a> {
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
         let t_min = ahead(t_min);
-        match self {
-            Accel::Brute(b) => b.traverse::<Closest>(ray, t_min, hit),
-            Accel::Grid(g) => g.traverse::<Closest>(ray, t_min, hit),
-            Accel::Bvh2(b) => b.traverse::<Closest>(ray, t_min, hit),
-            Accel::Bvh4(b) => b.traverse::<Closest>(ray, t_min, hit),
-            Accel::Bvh8(b) => b.traverse::<Closest>(ray, t_min, hit),
-            #[cfg(feature = "embree")]
-            Accel::Embree(e) => e.intersect(ray, t_min, hit),
-        }
+        each!(self, s => Structure::traverse::<Closest>(s, ray, t_min, hit))
     }
 
     /// True if anything is hit with `t` in `(t_min, t_max)`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
         let (t_min, mut hit) = (ahead(t_min), Hit::miss(t_max));
-        match self {
-            #[cfg(feature = "embree")]
-            Accel::Embree(e) => e.occluded(ray, t_min, t_max),
-            Accel::Brute(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
-            Accel::Grid(g) => g.traverse::<AnyHit>(ray, t_min, &mut hit),
-            Accel::Bvh2(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
-            Accel::Bvh4(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
-            Accel::Bvh8(b) => b.traverse::<AnyHit>(ray, t_min, &mut hit),
-        }
+        each!(self, s => Structure::traverse::<AnyHit>(s, ray, t_min, &mut hit))
     }
 
     /// The closest hits of the rays of `rays` whose bit is set in `active`, each with `t` in
@@ -262,13 +246,15 @@ impl<'a> Accel<'a> {
     #[inline]
     pub fn intersect_packet(&self, rays: &RayPacket, active: u8, t_min: f32, hits: &mut HitPacket) -> u8 {
         let t_min = ahead(t_min);
-        match self {
-            Accel::Bvh4(b) => b.traverse_packet::<Closest>(rays, active, t_min, hits),
-            Accel::Bvh8(b) => b.traverse_packet::<Closest>(rays, active, t_min, hits),
-            #[cfg(feature = "embree")]
-            Accel::Embree(e) => e.intersect_packet(rays, active, t_min, hits),
-            _ => packet::ray_by_ray(active, |k| self.intersect(&rays[k], t_min, &mut hits[k])),
-        }
+        each!(self, s => Structure::traverse_packet::<Closest>(s, rays, active, t_min, hits))
+    }
+
+    /// The mask of the rays of `rays` in `active` that hit anything with `t` in `(t_min, t_max[k])`:
+    /// [`Accel::occluded`] for each, as a packet where the structure has a packet kernel.
+    #[inline]
+    pub fn occluded_packet(&self, rays: &RayPacket, active: u8, t_min: f32, t_max: &[f32; PACKET]) -> u8 {
+        let (t_min, mut hits) = (ahead(t_min), t_max.map(Hit::miss));
+        each!(self, s => Structure::traverse_packet::<AnyHit>(s, rays, active, t_min, &mut hits))
     }
 
     /// The closest hit of each ray of `rays` with `t` in `(t_min, hits[i].t)`, into `hits[i]` (a miss
@@ -278,19 +264,10 @@ impl<'a> Accel<'a> {
     pub fn intersect_stream(&self, rays: &[Ray], t_min: f32, hits: &mut [Hit]) {
         assert_eq!(rays.len(), hits.len(), "a hit per ray");
         let t_min = ahead(t_min);
-        match self {
-            Accel::Bvh4(b) => with_spare(rays.len(), |_, found| {
-                b.traverse_stream::<Closest>(rays, t_min, hits, found)
-            }),
-            Accel::Bvh8(b) => with_spare(rays.len(), |_, found| {
-                b.traverse_stream::<Closest>(rays, t_min, hits, found)
-            }),
-            _ => {
-                for (ray, hit) in rays.iter().zip(hits) {
-                    self.intersect(ray, t_min, hit);
-                }
-            }
-        }
+        with_spare(
+            rays.len(),
+            |_, found| each!(self, s => Structure::traverse_stream::<Closest>(s, rays, t_min, hits, found)),
+        )
     }
 
     /// Whether each ray of `rays` hits anything with `t` in `(t_min, t_max[i])`, into `occluded[i]`:
@@ -301,35 +278,10 @@ impl<'a> Accel<'a> {
             "a distance and a flag per ray"
         );
         let t_min = ahead(t_min);
-        match self {
-            Accel::Bvh4(b) => with_spare(rays.len(), |hits, _| {
-                hits.iter_mut().zip(t_max).for_each(|(h, &t)| *h = Hit::miss(t));
-                b.traverse_stream::<AnyHit>(rays, t_min, hits, occluded)
-            }),
-            Accel::Bvh8(b) => with_spare(rays.len(), |hits, _| {
-                hits.iter_mut().zip(t_max).for_each(|(h, &t)| *h = Hit::miss(t));
-                b.traverse_stream::<AnyHit>(rays, t_min, hits, occluded)
-            }),
-            _ => {
-                for ((ray, &t_max), occluded) in rays.iter().zip(t_max).zip(occluded) {
-                    *occluded = self.occluded(ray, t_min, t_max);
-                }
-            }
-        }
-    }
-
-    /// The mask of the rays of `rays` in `active` that hit anything with `t` in `(t_min, t_max[k])`:
-    /// [`Accel::occluded`] for each, as a packet where the structure has a packet kernel.
-    #[inline]
-    pub fn occluded_packet(&self, rays: &RayPacket, active: u8, t_min: f32, t_max: &[f32; PACKET]) -> u8 {
-        let (t_min, mut hits) = (ahead(t_min), t_max.map(Hit::miss));
-        match self {
-            Accel::Bvh4(b) => b.traverse_packet::<AnyHit>(rays, active, t_min, &mut hits),
-            Accel::Bvh8(b) => b.traverse_packet::<AnyHit>(rays, active, t_min, &mut hits),
-            #[cfg(feature = "embree")]
-            Accel::Embree(e) => e.occluded_packet(rays, active, t_min, t_max),
-            _ => packet::ray_by_ray(active, |k| self.occluded(&rays[k], t_min, t_max[k])),
-        }
+        with_spare(rays.len(), |hits, _| {
+            hits.iter_mut().zip(t_max).for_each(|(h, &t)| *h = Hit::miss(t));
+            each!(self, s => Structure::traverse_stream::<AnyHit>(s, rays, t_min, hits, occluded))
+        })
     }
 }
 

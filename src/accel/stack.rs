@@ -1,10 +1,8 @@
 //! The traversal stack: a fixed-capacity array on the machine stack that is *not* cleared on creation.
 //!
-//! A traversal makes a new stack per ray (or packet), and most rays use a few entries of it. Zeroing a
-//! `[T; N]` up front was measured at 18.6% of all instructions of a `dragon.p3f` frame (callgrind,
-//! 1 thread: `memset` of 2 KB per single ray and 9 KB per packet), more than the packet traversal
-//! itself. The entries are only ever read below `len`, where they were written, so they need no value
-//! before that.
+//! A traversal makes a new stack per ray (or packet), and most rays use a few entries of it: zeroing
+//! it up front cost more than the packet traversal itself (`profiles/README.md`, tuned constants). The
+//! entries are only ever read below `len`, where they were written, so they need no value before that.
 
 use std::mem::MaybeUninit;
 

@@ -11,8 +11,9 @@ use whitted::accel::{Accel, AccelKind, Prims};
 use whitted::render::spd::{self, Counts};
 use whitted::scene::{self, Scene};
 
-use super::args::{BuildKind, build_options};
+use super::frame::{BuildKind, build_options};
 use super::report::{accel_name, image_size, simd_name};
+use super::setup::warn;
 
 /// Arguments of `whitted info`.
 #[derive(Args)]
@@ -43,9 +44,7 @@ pub fn run(args: &InfoArgs) -> whitted::Result<()> {
     let start = Instant::now();
     let scene = scene::load(&args.scene)?;
     let load_s = start.elapsed().as_secs_f64();
-    for w in &scene.warnings {
-        eprintln!("whitted: warning: {w}");
-    }
+    warn(&scene.warnings);
     let built = match args.accel {
         Some(kind) => {
             let start = Instant::now();

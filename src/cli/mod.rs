@@ -5,20 +5,22 @@
 //! its range); 130 when Ctrl-C interrupted a render, after writing what was finished and saying so on
 //! stderr (128 + SIGINT, what a shell reports for a process the signal killed).
 
-mod args;
 mod bench;
+mod frame;
 mod info;
 mod merge;
 mod outputs;
-mod plan;
 mod render;
 mod report;
+mod setup;
+mod values;
 #[cfg(feature = "view")]
 mod view;
 
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use render::Ended;
 
 /// A data-oriented SIMD CPU Whitted ray tracer for .p3f / NFF / PLY / OBJ scenes.
 #[derive(Parser)]
@@ -43,14 +45,6 @@ enum Command {
     /// moves and refined while it stands still (`whitted view --help` lists the keys).
     #[cfg(feature = "view")]
     View(view::ViewArgs),
-}
-
-/// How a command that did not fail ended.
-pub enum Ended {
-    /// It did all it was asked.
-    Done,
-    /// Ctrl-C stopped it; what was finished is written.
-    Interrupted,
 }
 
 /// The exit status of an interrupted command: 128 + SIGINT.

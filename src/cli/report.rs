@@ -4,35 +4,15 @@
 use std::path::Path;
 use std::time::Duration;
 
-use clap::Args;
 use serde_json::{Map, Value, json};
-use whitted::accel::{Accel, Simd};
-use whitted::render::progressive::Progressive;
+use whitted::accel::{Accel, Isa};
 use whitted::render::spd::{self, Counts};
 use whitted::render::{Options, RayCounts};
-
-use super::plan::Plan;
-use super::render::RenderArgs;
 
 /// The program's version, as `whitted --version` prints it.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 /// The Readme's tolerance: a renderer's counts should be within 10% of its table.
 pub const SPD_TOLERANCE: f64 = 0.10;
-
-/// `render`'s `--stats` and `--spd`.
-#[derive(Args)]
-pub struct ReportArgs {
-    /// Print the rays by kind, Mrays/s, the times, the accelerator, kernel, instruction set, threads
-    /// and version: `--stats` as text on stderr (even with --quiet), `--stats=json` as one JSON object
-    /// on stdout. With --spd, also the SPD counts beside the Readme's.
-    #[arg(long, value_name = "FORMAT", num_args = 0..=1, require_equals = true, default_missing_value = "text")]
-    pub stats: Option<Format>,
-    /// Render with the Standard Procedural Databases' test procedure: a 512x512 image from 513x513
-    /// corner rays, spp 0, 4 bounces (refuses --spp, --passes, --tiles, --passes-range, --width,
-    /// --height, --max-depth and .partial outputs).
-    #[arg(long)]
-    pub spd: bool,
-}
 
 /// How the report is printed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -88,31 +68,6 @@ impl Report {
             times: times.map(|t| t.as_secs_f64()),
             rays,
             per_frame: false,
-        }
-    }
-
-    /// The report of `render`: `acc` holds the passes rendered on `pool`, in `times` (load, build,
-    /// render).
-    pub fn of_render(
-        args: &RenderArgs,
-        plan: &Plan,
-        accel: &Accel,
-        pool: &rayon::ThreadPool,
-        times: [Duration; 3],
-        acc: &Progressive,
-    ) -> Report {
-        let threads = pool.current_num_threads();
-        let report = Report::new(
-            args.scene.as_deref(),
-            &plan.options,
-            accel,
-            threads,
-            times,
-            acc.rays(),
-        );
-        Report {
-            passes: acc.passes(),
-            ..report
         }
     }
 
@@ -246,9 +201,9 @@ pub fn simd_name(accel: &Accel) -> &'static str {
         return "embree";
     }
     match accel.simd() {
-        Some(Simd::Avx512) => "avx512",
-        Some(Simd::Avx2) => "avx2",
-        Some(Simd::Portable) => "portable",
+        Some(Isa::Avx512) => "avx512",
+        Some(Isa::Avx2) => "avx2",
+        Some(Isa::Portable) => "portable",
         None => "scalar",
     }
 }

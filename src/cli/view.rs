@@ -3,17 +3,17 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use whitted::render::Options;
-use whitted::view::{self, Config, state::MAX_DEPTH};
+use whitted::view::{self, Config, state::MAX_VIEW_DEPTH};
 
-use super::args::{FrameArgs, load_scene, resolution, thread_pool};
+use super::frame::{DEFAULT_DEPTH, FrameArgs};
+use super::setup::{load_scene, thread_pool, warn};
 
 /// Arguments of `whitted view`.
 #[derive(Args)]
 #[command(after_help = "\
 Keys: W/A/S/D/Q/E move (forward, left, back, right, down, up); arrow keys turn; drag with the left \
 button to orbit the point looked at; the wheel zooms (field of view); R returns to the file's camera. \
-1-5: accelerator none/grid/bvh2/bvh4/bvh8 (6: embree, with the embree feature); K: single/packet kernel; H: soft shadows; F: depth of field; \
+1-5: accelerator none/grid/bvh2/bvh4/bvh8 (6: embree, with the embree feature); K: single/packet/stream kernel; H: soft shadows; F: depth of field; \
 [ and ]: fewer/more bounces; P: progressive refinement; F12 or Ctrl-S: save the image; Escape: quit.")]
 pub struct ViewArgs {
     /// The scene (.p3f, .nff, .ply, .obj, optionally .gz); the built-in default scene if omitted.
@@ -21,7 +21,7 @@ pub struct ViewArgs {
     #[command(flatten)]
     frame: FrameArgs,
     /// Most bounces after the primary hit, to begin with ([ and ] change it).
-    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(0..=MAX_DEPTH as i64))]
+    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(0..=MAX_VIEW_DEPTH as i64))]
     max_depth: u32,
     /// Show and save the image sRGB-encoded (default: linear values, as `render` writes them).
     #[arg(long)]
@@ -38,17 +38,8 @@ pub struct ViewArgs {
 /// Opens the window.
 pub fn run(args: &ViewArgs) -> whitted::Result<()> {
     let scene = load_scene(args.scene.as_deref())?;
-    for w in &scene.warnings {
-        eprintln!("whitted: warning: {w}");
-    }
-    let (width, height) = resolution(&scene, args.frame.width, args.frame.height);
-    let options = Options {
-        width,
-        height,
-        max_depth: args.max_depth,
-        kernel: args.frame.kernel,
-        ..Options::new(&scene)
-    };
+    warn(&scene.warnings);
+    let options = args.frame.options(&scene, args.max_depth);
     options.validate()?;
     let pool = thread_pool(args.frame.threads)?;
     let name = match &args.scene {

@@ -4,9 +4,9 @@
 //! Embree joins them (named `embree`), checked with [`Agreement::Edges`]: its own triangle test may
 //! part from ours where a ray crosses an edge.
 
-use super::oracle::Agreement;
+use super::agreement::Agreement;
 use crate::accel::bvh2::Builder;
-use crate::accel::{Accel, AccelKind, BuildOptions, Prims, Simd};
+use crate::accel::{Accel, AccelKind, BuildOptions, Isa, Prims};
 
 /// A structure and the options it is built with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -110,7 +110,7 @@ impl Contestant<'_> {
     }
 
     /// True where the images rendered are brute force's, byte for byte: every structure of ours, not
-    /// Embree (whose images `tests/embree.rs` compares within a tolerance).
+    /// Embree (whose images `tests/embree/main.rs` compares within a tolerance).
     pub fn same_images(&self) -> bool {
         !self.is_embree()
     }
@@ -137,10 +137,10 @@ impl Contestant<'_> {
 }
 
 /// The instruction sets the wide BVHs' kernels have, in the order they are listed.
-const SIMD: [(Simd, &str); 3] = [
-    (Simd::Avx512, "avx512"),
-    (Simd::Avx2, "avx2"),
-    (Simd::Portable, "portable"),
+const SIMD: [(Isa, &str); 3] = [
+    (Isa::Avx512, "avx512"),
+    (Isa::Avx2, "avx2"),
+    (Isa::Portable, "portable"),
 ];
 
 /// Every build of [`BUILDS`] over `prims`, each built once (on the current rayon pool), the wide BVHs at
@@ -149,9 +149,9 @@ const SIMD: [(Simd, &str); 3] = [
 /// stderr, which kernels are not there; a set the CPU has but a structure refuses is a bug, and
 /// panics, as does an Embree that fails to build.
 pub fn all(prims: Prims<'_>) -> Vec<Contestant<'_>> {
-    if !Simd::Avx2.available() {
+    if !Isa::Avx2.available() {
         eprintln!("this CPU has no AVX2: the wide BVHs run their portable kernels only");
-    } else if !Simd::Avx512.available() {
+    } else if !Isa::Avx512.available() {
         eprintln!("this CPU has no AVX-512: the wide BVHs' AVX-512 kernels are not tested here");
     }
     let mut out = Vec::new();

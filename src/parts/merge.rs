@@ -4,7 +4,7 @@
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use super::partial::{Part, Settings};
+use super::partial::{Part, PartSettings};
 use crate::error::{Error, Result};
 use crate::render::film::Film;
 use crate::render::progressive::mean;
@@ -67,7 +67,7 @@ pub fn merge(paths: &[PathBuf]) -> Result<Film> {
 }
 
 /// Checks that every tile's passes `0..settings.passes` are covered by exactly one part each.
-fn check_coverage(parts: &[(&Path, Part)], settings: &Settings) -> Result<()> {
+fn check_coverage(parts: &[(&Path, Part)], settings: &PartSettings) -> Result<()> {
     let grid = tiles::tiles(settings.width, settings.height);
     // Per tile, the pass ranges covering it and the part each came from.
     let mut cover: Vec<Vec<(Range<u32>, usize)>> = vec![Vec::new(); grid.len()];

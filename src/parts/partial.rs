@@ -42,7 +42,7 @@ const PIXEL: usize = 28;
 
 /// What every part of one render must agree on.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Settings {
+pub struct PartSettings {
     /// The scene's fingerprint.
     pub scene: u64,
     /// Image width.
@@ -65,11 +65,11 @@ pub struct Settings {
     pub passes: u32,
 }
 
-impl Settings {
+impl PartSettings {
     /// The settings of a render of `scene` (its camera's lens included, after any override) with
     /// `options`, in `passes` passes of `options.spp` samples each.
     pub fn new(scene: &Scene, options: &Options, passes: u32) -> Self {
-        Settings {
+        PartSettings {
             scene: scene.fingerprint(),
             width: options.width,
             height: options.height,
@@ -84,7 +84,7 @@ impl Settings {
     }
 
     /// The fields in which `self` and `other` differ, as `name a vs b`.
-    pub(super) fn differences(&self, other: &Settings) -> Vec<String> {
+    pub(super) fn differences(&self, other: &PartSettings) -> Vec<String> {
         let mut out = Vec::new();
         let mut check = |name: &str, a: String, b: String| {
             if a != b {
@@ -131,7 +131,7 @@ impl Settings {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Part {
     /// The render this is a part of.
-    pub settings: Settings,
+    pub settings: PartSettings,
     /// The passes summed, from 0.
     pub passes: Range<u32>,
     /// K of N, as the part was asked for.
@@ -146,7 +146,7 @@ pub struct Part {
 
 impl Part {
     /// The part that `progressive` holds: its tiles, over the passes from `first` on.
-    pub fn new(settings: Settings, progressive: &Progressive, first: u32, part: (u32, u32)) -> Self {
+    pub fn new(settings: PartSettings, progressive: &Progressive, first: u32, part: (u32, u32)) -> Self {
         let sums = progressive.sums().to_vec();
         Part {
             settings,
@@ -272,7 +272,7 @@ impl Part {
     /// The accumulator of this part's tiles and passes, to render more of the same render into.
     pub fn into_progressive(self) -> Progressive {
         let passes = self.passes.end - self.passes.start;
-        let Settings { width, height, .. } = self.settings;
+        let PartSettings { width, height, .. } = self.settings;
         Progressive::with_sums(width, height, self.tiles, self.sums, passes)
     }
 }
@@ -307,7 +307,7 @@ fn read_checked(path: &Path) -> std::result::Result<Part, String> {
 
 /// The fixed header of a `.partial` file: the first [`HEADER`] bytes.
 struct Header {
-    settings: Settings,
+    settings: PartSettings,
     /// The first pass of the part.
     first: u32,
     /// One past its last pass.
@@ -359,7 +359,7 @@ impl Header {
         if count > tiles {
             return Err(format!("{count} tiles, but a {width}x{height} frame has {tiles}"));
         }
-        let settings = Settings {
+        let settings = PartSettings {
             scene,
             width,
             height,
@@ -452,7 +452,7 @@ mod tests {
     use glam::Vec3;
 
     fn part() -> Part {
-        let settings = Settings {
+        let settings = PartSettings {
             scene: 7,
             width: 20,
             height: 18,
@@ -489,7 +489,7 @@ mod tests {
             roughness: 0.25,
             ..Options::new(&scene)
         };
-        let expected = Settings {
+        let expected = PartSettings {
             scene: scene.fingerprint(),
             width: 20,
             height: 18,
@@ -501,7 +501,7 @@ mod tests {
             roughness: 0.25,
             passes: 4,
         };
-        assert_eq!(Settings::new(&scene, &options, 4), expected);
+        assert_eq!(PartSettings::new(&scene, &options, 4), expected);
     }
 
     /// The length the header implies is compared with the file's before its pixels are read: a file

@@ -42,6 +42,7 @@ impl CubeMap {
     }
 
     /// The colour seen in direction `d` (need not be unit length); nearest texel.
+    #[inline]
     pub fn lookup(&self, d: Vec3) -> Vec3 {
         // Face selection and (sc, tc) as in the OpenGL specification's cube-map table.
         let a = d.abs();

@@ -65,10 +65,13 @@ pub const MAX_SPP: u32 = 256 * 256;
 
 /// The most bounces after the primary hit. Shading recurses once per bounce, the packet kernel with
 /// eight rays' state per level: 64 levels among nested glass spheres fit in 512 KiB of stack (and
-/// overflow 256 KiB), a quarter of a rayon worker's 2 MiB (`tests/limits.rs` renders them on such a
+/// overflow 256 KiB), a quarter of a rayon worker's 2 MiB (`tests/render/limits.rs` renders them on such a
 /// worker); the 3,000 bounces once accepted needed about 50 times that. However deep a tree may go, it
 /// cannot grow past a fixed number of rays ([`super::whitted`]'s split budget).
 pub const MAX_DEPTH: u32 = 64;
+
+/// The bounce limit unless one is asked for (the course's renderers stop at 6).
+pub const DEFAULT_DEPTH: u32 = 6;
 
 /// What to render, beyond the scene itself.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -113,7 +116,7 @@ impl Options {
         Options {
             width: scene.camera.width,
             height: scene.camera.height,
-            max_depth: 6,
+            max_depth: DEFAULT_DEPTH,
             kernel: Kernel::Packet,
             spp: scene.spp,
             seed: 0,

@@ -12,7 +12,7 @@ use glam::{Vec2, Vec3};
 use rand_xoshiro::Xoshiro256PlusPlus;
 use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
-use crate::digest::mix;
+use crate::digest::{SPLITMIX_STEP, mix};
 
 /// Streams of one pixel: the pattern, then each sample's own.
 const PATTERN_STREAM: u32 = 0;
@@ -25,10 +25,18 @@ pub struct Sampler {
 impl Sampler {
     /// The generator of `stream` (0: the pattern, `1 + s`: sample `s`) of pixel `pixel` (row-major
     /// index) in pass `pass` of a render seeded with `seed`.
+    #[inline]
     pub fn new(seed: u64, pass: u32, pixel: u64, stream: u32) -> Self {
         let key = mix(mix(mix(seed) ^ pixel) ^ (u64::from(pass) << 32 | u64::from(stream)));
+        // `Xoshiro256PlusPlus::seed_from_u64`'s state (four SplitMix64 outputs), spelt out so that it
+        // inlines here: the crate's function is not `#[inline]`, and a release build has no LTO.
+        let mut state = [0u8; 32];
+        for (i, word) in state.chunks_exact_mut(8).enumerate() {
+            let x = key.wrapping_add(SPLITMIX_STEP.wrapping_mul(i as u64 + 1));
+            word.copy_from_slice(&mix(x).to_le_bytes());
+        }
         Sampler {
-            rng: Xoshiro256PlusPlus::seed_from_u64(key),
+            rng: Xoshiro256PlusPlus::from_seed(state),
         }
     }
 

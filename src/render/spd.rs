@@ -19,14 +19,14 @@ use crate::scene::Scene;
 /// Image side of the procedure.
 pub const SIZE: u32 = 512;
 /// Bounces after the eye ray: the tree stops at depth 5 with the eye ray at depth 1.
-pub const MAX_DEPTH: u32 = 4;
+pub const SPD_DEPTH: u32 = 4;
 
 /// The options of the procedure for `scene`: 513 × 513 corner rays, four bounces, spp 0.
 pub fn options(scene: &Scene) -> Options {
     Options {
         width: SIZE + 1,
         height: SIZE + 1,
-        max_depth: MAX_DEPTH,
+        max_depth: SPD_DEPTH,
         spp: 0,
         spd: true,
         ..Options::new(scene)

@@ -1,8 +1,9 @@
 //! The Whitted integrator (Whitted 1980): local Blinn-Phong colour from every light sample not in shadow,
 //! plus mirror reflection and Snell refraction weighted by Schlick's Fresnel term, with Beer absorption
 //! inside transparent objects. It answers "what colour does this ray see"; which rays to ask it about
-//! (pixels, samples, tiles, passes) is the frame's business ([`super::frame`]). Its packet twin, the
-//! same shading for eight rays at a time, is [`super::packets`].
+//! (pixels, samples, tiles, passes) is the kernels' and the frame's business (`super::kernel`,
+//! [`super::frame`]). Its packet twin, the same shading for eight rays at a time, is
+//! `kernel/packet.rs`.
 //!
 //! Conventions (those of NFF/p3f renderers; the README lists them): surfaces are two-sided, so normals
 //! are turned toward the incoming ray; no ambient term; lights have no falloff; secondary and shadow rays

@@ -205,7 +205,7 @@ mod tests {
     use std::sync::mpsc;
 
     use super::*;
-    use crate::render::Kernel;
+    use crate::render::{DEFAULT_DEPTH, Kernel};
     use state::{Input, Key, Settings, ViewState};
 
     #[test]
@@ -227,7 +227,11 @@ mod tests {
             height: 30,
             ..Options::new(&scene)
         };
-        let view = ViewState::new(&scene, options, Settings::new(AccelKind::Bvh4, Kernel::Packet, 6));
+        let view = ViewState::new(
+            &scene,
+            options,
+            Settings::new(AccelKind::Bvh4, Kernel::Packet, DEFAULT_DEPTH),
+        );
         let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
         let (send, jobs) = mpsc::channel();
         let signals = Signals::default();

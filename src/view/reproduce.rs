@@ -99,7 +99,7 @@ fn commas(v: Vec3) -> String {
 mod tests {
     use super::*;
     use crate::accel::AccelKind;
-    use crate::render::{Kernel, Options};
+    use crate::render::{DEFAULT_DEPTH, Kernel, Options};
     use crate::scene::Scene;
     use crate::view::state::{Input, Key, Settings, ViewState};
 
@@ -109,7 +109,7 @@ mod tests {
         let mut camera = Camera::new(Vec3::new(0.1, 0.2, 5.0), Vec3::ZERO, Vec3::Y, 45.0, 64, 48);
         camera.hither = 0.01;
         let scene = Scene::new(camera);
-        let settings = Settings::new(AccelKind::Bvh4, Kernel::Packet, 6);
+        let settings = Settings::new(AccelKind::Bvh4, Kernel::Packet, DEFAULT_DEPTH);
         let mut view = ViewState::new(&scene, Options::new(&scene), settings);
         view.input(Input::Drag { dx: 13.0, dy: -7.0 });
         view.input(Input::Scroll(1.0));

@@ -1,8 +1,13 @@
-//! Helpers shared by the integration tests.
+//! Helpers shared by the integration tests: each test binary (`tests/*/main.rs`) includes this file as
+//! its module `common`.
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
+
+use glam::DVec3;
+use serde_json::Value;
+use whitted::scene::Material;
 
 /// The crate root.
 pub fn root() -> PathBuf {
@@ -31,6 +36,14 @@ pub fn have(program: &str, probe: &[&str], install: &str) -> bool {
         eprintln!("skipped: {why}");
     }
     runs
+}
+
+/// The number in the environment variable `name` (a longer run than the default), else `default`.
+pub fn env_number<T: std::str::FromStr>(name: &str, default: T) -> T {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
 }
 
 /// Runs the `whitted` binary.
@@ -108,4 +121,70 @@ pub fn ok(args: &[&str]) -> Output {
         String::from_utf8_lossy(&out.stderr)
     );
     out
+}
+
+/// The stdout of `whitted ARGS`, which must succeed.
+pub fn stdout(args: &[&str]) -> String {
+    String::from_utf8(ok(args).stdout).unwrap()
+}
+
+/// The one JSON object that `whitted ARGS`, which must succeed, prints on stdout.
+pub fn json(args: &[&str]) -> Value {
+    let text = stdout(args);
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{e}: {text}"))
+}
+
+/// The stderr of a run that must have failed with exit status `status`, and without a panic.
+pub fn failed(out: &Output, status: i32) -> String {
+    let err = String::from_utf8(out.stderr.clone()).unwrap();
+    assert_eq!(out.status.code(), Some(status), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    err
+}
+
+/// The stderr of `whitted ARGS`, which must fail with exit status `status` and no panic.
+pub fn fails(args: &[&str], status: i32) -> String {
+    let out = whitted(args);
+    assert_eq!(
+        out.status.code(),
+        Some(status),
+        "whitted {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    failed(&out, status)
+}
+
+/// The error line of a failed run: exit status 1, no panic, and a `whitted: ` line last, returned.
+pub fn failure(out: &Output) -> String {
+    let err = failed(out, 1);
+    let last = err.lines().last().unwrap_or_default().to_string();
+    assert!(last.starts_with("whitted: "), "{err}");
+    last
+}
+
+/// An unsigned integer of a JSON report.
+pub fn int(v: &Value) -> u64 {
+    v.as_u64()
+        .unwrap_or_else(|| panic!("not an unsigned integer: {v}"))
+}
+
+/// An image file's pixels, 8-bit RGB.
+pub fn rgb(path: &Path) -> image::RgbImage {
+    image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgb8()
+}
+
+/// Blinn-Phong term of one unoccluded light at `p` (unit normal `n` facing the viewer, unit `v` toward
+/// the viewer): C_light · (Kd·Cd·max(0, n·L) + Ks·Cs·max(0, n·h)^shine), 0 when n·L ≤ 0, in f64.
+pub fn blinn_phong(m: &Material, p: DVec3, n: DVec3, v: DVec3, light: DVec3, color: DVec3) -> DVec3 {
+    let l = (light - p).normalize();
+    let n_dot_l = n.dot(l);
+    if n_dot_l <= 0.0 {
+        return DVec3::ZERO;
+    }
+    let h = (l + v).normalize();
+    let spec = n.dot(h).max(0.0).powf(m.shininess as f64);
+    color * (m.kd as f64 * n_dot_l * m.diffuse.as_dvec3() + m.ks as f64 * spec * m.specular.as_dvec3())
 }

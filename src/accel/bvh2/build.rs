@@ -48,7 +48,7 @@ const PLACEHOLDER: Node = Node {
 const MAX_FREE_DEPTH: usize = 64;
 /// The deepest a built tree can be: `MAX_FREE_DEPTH` levels, then halvings of at most 2³² primitives.
 /// The traversal stacks are sized from it.
-pub const MAX_DEPTH: usize = MAX_FREE_DEPTH + 32;
+pub const MAX_TREE_DEPTH: usize = MAX_FREE_DEPTH + 32;
 
 /// One primitive as the builders move it: its box, its id, and whether it is a triangle (leaves hold
 /// one kind only, so a BVH4 leaf of triangles is a block the SIMD kernel tests as a whole). Two to a

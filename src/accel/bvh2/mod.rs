@@ -9,10 +9,11 @@ use std::fmt;
 use super::policy::HitPolicy;
 use super::prims::{Hit, Prims};
 use super::stack::Stack;
+use super::structure::Structure;
 use crate::geometry::aabb::Aabb;
 use crate::geometry::ray::{CULL_MARGIN, Ray, safe_inverse};
 
-pub use build::{Builder, MAX_DEPTH, build};
+pub use build::{Builder, MAX_TREE_DEPTH, build};
 
 /// A node: a box and either two children (`count == 0`, children at `first` and `first + 1`) or a leaf
 /// of `count` primitives (`ids[first..first + count]`).
@@ -42,10 +43,8 @@ pub const INTERSECTION_COST: f32 = 1.0;
 /// Cost of one SIMD block test (a leaf of the wide BVHs, whose builds use `block` 4), in the builder's
 /// choice between a split and a leaf: half a traversal step. A leaf of five to eight triangles is one
 /// eight-lane step of the wide kernels where the CPU has AVX, and a split in its place costs a wide
-/// node's box test, its stack traffic and its place on the chain from node to child. Measured on the
-/// full dragon (one thread, alternated in one process) against 1.0: BVH8 single rays +1-2%, packets
-/// +0-3%; BVH4 single rays +2-4%, packets +3-6%; 17% fewer wide nodes. 0.35 builds the same tree as
-/// 0.5; 0.75 and 0.25 measured no better.
+/// node's box test, its stack traffic and its place on the chain from node to child (figures:
+/// `profiles/README.md`, tuned constants).
 pub const BLOCK_COST: f32 = 0.5;
 
 /// A binary BVH over a scene's bounded primitives.
@@ -58,8 +57,8 @@ pub struct Bvh2<'a> {
     pub ids: Vec<u32>,
 }
 
-/// Traversal stack depth: one entry per level (the farther child) of a tree at most [`MAX_DEPTH`] deep.
-const STACK: usize = MAX_DEPTH;
+/// Traversal stack depth: one entry per level (the farther child) of a tree at most [`MAX_TREE_DEPTH`] deep.
+const STACK: usize = MAX_TREE_DEPTH;
 
 impl<'a> Bvh2<'a> {
     /// Builds the tree for scalar leaf tests.
@@ -206,5 +205,20 @@ impl fmt::Display for Stats {
             write!(f, " {k}{plus}:{n}")?;
         }
         Ok(())
+    }
+}
+
+impl<'a> Structure<'a> for Bvh2<'a> {
+    fn prims(&self) -> Prims<'a> {
+        self.prims
+    }
+
+    fn describe(&self) -> String {
+        format!("bvh2: {}", self.stats())
+    }
+
+    #[inline]
+    fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        Bvh2::traverse::<P>(self, ray, t_min, hit)
     }
 }

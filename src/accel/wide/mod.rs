@@ -3,30 +3,39 @@
 //! depth-first into one array. Each node keeps its children's boxes as structure of arrays, so one
 //! `W`-lane slab test answers all of them at once.
 //!
-//! One structure, one collapse, one single-ray kernel (`traverse.rs`), one packet kernel (`packet.rs`)
-//! and one stream kernel (`stream.rs`) serve both widths: [`Bvh4`] (4 lanes of SSE, the default where the CPU lacks AVX2) and
-//! [`Bvh8`] (8 lanes: one AVX2 register where the CPU has AVX2, detected at run time, else two SSE
-//! halves). Both kernels test boxes with the one slab test of `lanes.rs`, on the lane type of the
-//! instruction set chosen there. Wider nodes mean fewer node visits and fewer stack operations per
-//! ray, which is where half of a BVH4 ray's instructions go (`profiles/`).
+//! One structure and one collapse (`collapse.rs`) serve both widths: [`Bvh4`] (4 lanes of SSE, the
+//! default where the CPU lacks AVX2) and [`Bvh8`] (8 lanes: one AVX2 register where the CPU has AVX2,
+//! detected at run time, else two SSE halves). Their kernels are a triad, each written once for both
+//! widths, both hit policies and every instruction set: one ray (`single.rs`), a packet of eight
+//! (`packet.rs`) and a stream of many (`stream.rs`). All three test boxes with the one slab test
+//! (`slab.rs`) on the SIMD lanes (`lanes/`) of the instruction set chosen at run time (`isa.rs`),
+//! order the children they enter by `order.rs`, and test leaves four or eight triangles at a time
+//! (`tri4.rs`). Wider nodes mean fewer node visits and fewer stack operations per ray (`profiles/`).
 
 mod collapse;
+mod isa;
 mod lanes;
+mod order;
 mod packet;
+mod single;
+mod slab;
 mod stream;
-mod traverse;
 pub mod tri4;
 
-pub use lanes::Simd;
+pub use isa::Isa;
 pub use stream::STREAM_MIN;
 
 use glam::Vec3;
 
 use super::bvh2::{self, Builder, Bvh2, Stats};
+use super::packet::{HitPacket, RayPacket};
 use super::pages::on_huge_pages;
-use super::prims::Prims;
+use super::policy::HitPolicy;
+use super::prims::{Hit, Prims};
+use super::structure::Structure;
 use crate::geometry::aabb::Aabb;
-use lanes::Isa;
+use crate::geometry::ray::Ray;
+use isa::Simd;
 
 /// A child reference: an interior node's index, a leaf, or [`EMPTY`]. A leaf is
 /// `LEAF | start << COUNT_BITS | count`, with [`TRIANGLES`] set when it holds triangles: then `start` is
@@ -43,7 +52,7 @@ pub const EMPTY: ChildRef = u32::MAX;
 /// Traversal stack depth (single rays and packets), for any width up to 8: a node pushes at most
 /// eight children and pops one, so seven entries per level of a tree no deeper than the BVH2 it was
 /// collapsed from. The stack is not cleared (`Stack`), so its size costs only address space.
-const STACK: usize = 7 * bvh2::MAX_DEPTH + 1;
+const STACK: usize = 7 * bvh2::MAX_TREE_DEPTH + 1;
 /// The most primitives a wide BVH can index: what fits a leaf reference's start beside its count.
 pub const MAX_PRIMS: u32 = 1 << (30 - COUNT_BITS);
 
@@ -98,7 +107,7 @@ pub struct WideBvh<'a, const W: usize> {
     /// The box around everything.
     pub bounds: Aabb,
     /// The kernels' instruction set, chosen at build time from the CPU.
-    isa: Isa,
+    simd: Simd,
 }
 
 /// The 4-wide BVH (the default accelerator on CPUs without AVX2).
@@ -126,7 +135,7 @@ impl<'a, const W: usize> WideBvh<'a, W> {
             tris: c.tris,
             root: c.root,
             bounds: bvh2.nodes.first().map_or(Aabb::EMPTY, |n| n.bounds),
-            isa: Isa::detect(),
+            simd: Simd::detect(),
         }
     }
 
@@ -136,16 +145,16 @@ impl<'a, const W: usize> WideBvh<'a, W> {
     }
 
     /// The instruction set the kernels use (the BVH4's single-ray kernel is SSE on any CPU).
-    pub fn simd(&self) -> Simd {
-        self.isa.simd()
+    pub fn simd(&self) -> Isa {
+        self.simd.isa()
     }
 
     /// Uses `simd` for the kernels (tests and benchmarks compare the paths); one the CPU lacks is
     /// refused and the current one kept.
-    pub fn set_simd(&mut self, simd: Simd) -> bool {
-        match Isa::new(simd) {
-            Some(isa) => {
-                self.isa = isa;
+    pub fn set_simd(&mut self, simd: Isa) -> bool {
+        match Simd::new(simd) {
+            Some(simd) => {
+                self.simd = simd;
                 true
             }
             None => false,
@@ -222,3 +231,56 @@ impl<'a, const W: usize> WideBvh<'a, W> {
         s
     }
 }
+
+/// The structure's verbs for one width, each through its kernel.
+macro_rules! wide_structure {
+    ($bvh:ident, |$b:ident| $describe:expr) => {
+        impl<'a> Structure<'a> for $bvh<'a> {
+            fn prims(&self) -> Prims<'a> {
+                self.prims
+            }
+
+            fn describe(&self) -> String {
+                let $b = self;
+                $describe
+            }
+
+            fn has_packet_kernel(&self) -> bool {
+                true
+            }
+
+            #[inline]
+            fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+                $bvh::traverse::<P>(self, ray, t_min, hit)
+            }
+
+            #[inline]
+            fn traverse_packet<P: HitPolicy>(
+                &self,
+                rays: &RayPacket,
+                active: u8,
+                t_min: f32,
+                hits: &mut HitPacket,
+            ) -> u8 {
+                $bvh::traverse_packet::<P>(self, rays, active, t_min, hits)
+            }
+
+            fn traverse_stream<P: HitPolicy>(
+                &self,
+                rays: &[Ray],
+                t_min: f32,
+                hits: &mut [Hit],
+                found: &mut [bool],
+            ) {
+                $bvh::traverse_stream::<P>(self, rays, t_min, hits, found)
+            }
+        }
+    };
+}
+
+wide_structure!(Bvh4, |b| format!("bvh4: {}", b.stats()));
+wide_structure!(Bvh8, |b| format!(
+    "bvh8 ({:?} slab tests): {}",
+    b.simd(),
+    b.stats()
+));

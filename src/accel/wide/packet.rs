@@ -14,7 +14,7 @@
 //!
 //! What is SIMD over the rays: every child box test (the node's boxes two at a time, each against the
 //! eight lanes, through the same [`slab`] as the single-ray kernel) and the culling of stack entries; the
-//! whole kernel runs on the lane type of the instruction set the BVH chose ([`super::lanes::Isa`]).
+//! whole kernel runs on the lane type of the instruction set the BVH chose ([`super::isa::Simd`]).
 //! What goes ray by ray: the leaves, each active ray through the single-ray kernel's own leaf test
 //! ([`WideBvh::leaf`]), and the planes beside the hierarchy. Testing one triangle against the eight lanes
 //! instead (bit-identical Möller–Trumbore in `f32x8`) was measured slower: it fetches each triangle from
@@ -24,7 +24,7 @@
 //! The answers are the single-ray kernel's ([`super::Bvh4::traverse`]): the per-lane box arithmetic is its
 //! operation for operation on the same lanes (the near/far planes by each ray's own direction signs,
 //! [`SLAB_ROBUST`] on the exit, [`CULL_MARGIN`] on the hit; where the packets' lanes have FMA and the
-//! BVH4's SSE single rays do not, the fused and unfused forms of `lanes.rs`'s slab test, both of which
+//! BVH4's SSE single rays do not, the fused and unfused forms of the slab test (`slab.rs`), both of which
 //! enter every box holding a hit), so a ray is never kept out of a box that holds its hit, and each
 //! leaf runs the single-ray kernel's leaf code, so hits, and ties inside a leaf, come out bit for bit
 //! the same. Only the order of leaves differs (the packet's, not each ray's), which
@@ -34,8 +34,9 @@
 
 use std::marker::PhantomData;
 
-use super::lanes::{Lanes8, OnLanes8, SlabRays, Twice, slab};
-use super::traverse::sort_far_to_near;
+use super::lanes::{Lanes8, OnLanes8, Twice};
+use super::order::sort_far_to_near;
+use super::slab::{SlabRays, slab};
 use super::{ChildRef, EMPTY, LEAF, STACK, WideBvh};
 use crate::accel::packet::{HitPacket, PACKET, RayPacket, bits};
 use crate::accel::policy::HitPolicy;
@@ -73,7 +74,7 @@ impl<const W: usize> WideBvh<'_, W> {
         t_min: f32,
         hits: &mut HitPacket,
     ) -> u8 {
-        self.isa.run8(Packet::<P, W> {
+        self.simd.run8(Packet::<P, W> {
             bvh: self,
             rays,
             active,
@@ -84,7 +85,7 @@ impl<const W: usize> WideBvh<'_, W> {
     }
 }
 
-/// The packet kernel as a computation over eight lanes, for [`super::lanes::Isa::run8`].
+/// The packet kernel as a computation over eight lanes, for [`super::isa::Simd::run8`].
 struct Packet<'r, 'b, P, const W: usize> {
     bvh: &'r WideBvh<'b, W>,
     rays: &'r RayPacket,
@@ -161,7 +162,7 @@ impl<P: HitPolicy, const W: usize> OnLanes8 for Packet<'_, '_, P, W> {
                 let t_max = t_hit.mul(margin);
                 let start = stack.len();
                 let t_max2 = Twice(t_max, t_max);
-                // Two children a step (see `Twice`: measured 5-15% faster than a child a step).
+                // Two children a step (see `Twice`; faster than one: `profiles/README.md`).
                 for c in (0..W).step_by(2) {
                     // The collapse fills a node's slots first to last: the first empty one ends them
                     // (an empty second slot of a pair has an inverted box, which no ray enters).

@@ -17,17 +17,16 @@ use std::marker::PhantomData;
 
 use wide::{f32x4, f32x8};
 
-use super::lanes::{Lanes, Lanes8, OnLanes8, SlabRay, SlabRays, slab};
+use super::lanes::{Lanes, Lanes8, OnLanes8};
+use super::order::sort_far_to_near;
+use super::slab::{SlabRay, SlabRays, slab};
 use super::{Bvh4, Bvh8, ChildRef, EMPTY, LEAF, WideBvh};
 use crate::accel::policy::HitPolicy;
 use crate::accel::prims::Hit;
 use crate::geometry::ray::{CULL_MARGIN, Ray, ahead};
 
-/// Below this many rays a node's stream goes on ray by ray. A stream's instructions a ray fall as this
-/// rises (callgrind, the `frame-stream` loop of `profiles/hot_loops.rs`: 317.3 M instructions at 2,
-/// 311.8 M at 8, 307.9 M at 32, 306.4 M at 64, 304.7 M at 128), since each ray pays a single ray's
-/// node test plus its place in the lists; what a stream saves is loads from memory, and on the full
-/// dragon's secondary rays 64 was the fastest of 4, 16 and 64 (`profiles/stream.txt`).
+/// Below this many rays a node's stream goes on ray by ray: each ray pays a single ray's node test plus
+/// its place in the lists, and what a stream saves is loads from memory (`profiles/README.md`).
 pub const STREAM_MIN: usize = 64;
 
 /// A ray of a node's stream: its index in the caller's slice and its entry distance into the node's box.
@@ -82,7 +81,7 @@ impl Bvh8<'_> {
         hits: &mut [Hit],
         found: &mut [bool],
     ) {
-        self.isa.run8(Stream::<P> {
+        self.simd.run8(Stream::<P> {
             bvh: self,
             rays,
             t_min,
@@ -93,7 +92,7 @@ impl Bvh8<'_> {
     }
 }
 
-/// The BVH8's stream kernel as a computation over eight lanes, for [`super::lanes::Isa::run8`].
+/// The BVH8's stream kernel as a computation over eight lanes, for [`super::isa::Simd::run8`].
 struct Stream<'r, 'b, P> {
     bvh: &'r Bvh8<'b>,
     rays: &'r [Ray],
@@ -128,9 +127,8 @@ impl<const W: usize> WideBvh<'_, W> {
             "a hit and a flag per ray"
         );
         let t_min = ahead(t_min);
-        // Taken out of the thread-local and put back, rather than borrowed in a closure: a closure is a
-        // function of its own, compiled without the caller's target features (its intrinsics were
-        // left as calls: 3.3x the instructions of a frame).
+        // Taken out of the thread-local and put back, not borrowed in a closure: a closure is compiled
+        // without the caller's target features, leaving its intrinsics as calls (`profiles/README.md`).
         let mut scratch = SCRATCH.take();
         let Scratch {
             prepared,
@@ -213,7 +211,7 @@ impl<const W: usize> WideBvh<'_, W> {
                 }
             }
             if !P::ANY {
-                super::traverse::sort_far_to_near(&mut order[..n], |&k| nearest[k]);
+                sort_far_to_near(&mut order[..n], |&k| nearest[k]);
             }
             for &k in &order[..n] {
                 self.prefetch(node.child[k]);

@@ -164,7 +164,8 @@ fn nearest<const N: usize, L: Lanes<N>>((t, u, v, mask): (L, L, L, u32)) -> Opti
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::wide::lanes::{Isa, OnLanes8, Simd};
+    use crate::accel::wide::isa::{Isa, Simd};
+    use crate::accel::wide::lanes::OnLanes8;
     use crate::geometry::ray::testing::TestRng;
     use crate::geometry::{ray::Ray, triangle};
     use crate::scene::{Camera, Material, Scene};
@@ -269,11 +270,11 @@ mod tests {
             hits > 3000 && from_hi > 500,
             "{hits} hits, {from_hi} in the second block"
         );
-        for simd in [Simd::Portable, Simd::Avx2, Simd::Avx512] {
-            let Some(isa) = Isa::new(simd) else {
+        for simd in [Isa::Portable, Isa::Avx2, Isa::Avx512] {
+            let Some(simd) = Simd::new(simd) else {
                 continue;
             };
-            let got = isa.run8(Pairs {
+            let got = simd.run8(Pairs {
                 blocks: &blocks,
                 rays: &rays,
             });

@@ -1,0 +1,226 @@
+//! `whitted render`: a scene to an image, or to a `.partial` file of part of one.
+
+mod args;
+mod plan;
+mod progress;
+mod resume;
+mod write;
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use whitted::accel::{Accel, Prims};
+use whitted::parts::partial::PartSettings;
+use whitted::render::progressive::Progressive;
+use whitted::render::{Renderer, memory};
+use whitted::scene::Scene;
+
+pub use args::RenderArgs;
+use plan::{Plan, Target};
+use progress::Progress;
+use resume::{done_already, joined, starting_point};
+use write::{check_outputs, write, write_sums};
+
+use super::report::{Report, image_size};
+use super::setup::{load_scene, thread_pool, warn};
+
+/// How a command that did not fail ended.
+pub enum Ended {
+    /// It did all it was asked.
+    Done,
+    /// Ctrl-C stopped it; what was finished is written.
+    Interrupted,
+}
+
+/// Set by Ctrl-C: the render stops at the next tile and writes what is finished.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+/// Renders and writes the image, or, when Ctrl-C stops the render, what is finished.
+pub fn run(args: &RenderArgs) -> whitted::Result<Ended> {
+    let start = Instant::now();
+    check_outputs(args)?;
+    let mut scene = load_scene(args.scene.as_deref())?;
+    warn(&scene.warnings);
+    let plan = Plan::new(args, &mut scene)?;
+    // A part's sums cover its tiles only; a whole frame is refused here rather than aborted later.
+    if plan.tiles.is_none() {
+        memory::check(plan.options.width, plan.options.height).map_err(whitted::Error::msg)?;
+    }
+    let pool = thread_pool(plan.threads)?;
+    let loaded = start.elapsed();
+    let build_start = Instant::now();
+    let accel = pool.install(|| Accel::try_build_with(Prims::new(&scene), plan.accel, plan.build))?;
+    let built = build_start.elapsed();
+    warn(&plan.warnings);
+    let renderer = Renderer::new(&scene, &accel, plan.options);
+    warn(&renderer.warnings);
+    // Ctrl-C stops at the next tile; what was written stays whole (files are renamed into place).
+    // Installing fails only if another handler is set, as in tests that call `run` twice: keep it.
+    let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::Relaxed));
+
+    let render_start = Instant::now();
+    let (acc, earlier) = starting_point(&plan, &scene);
+    let resumed = earlier.is_some() || acc.passes() > 0;
+    if done_already(&plan, &acc, earlier.is_some()) {
+        if !plan.quiet {
+            let output = plan.output.display();
+            eprintln!("whitted: {output} holds this part already; not rendered again");
+        }
+        return Ok(Ended::Done);
+    }
+    let progress = Progress::new(&plan, &acc);
+    let rendered = render_passes(&plan, &pool, &renderer, &progress, acc, earlier);
+    progress.bar.finish_and_clear();
+    let (acc, complete) = rendered?;
+    if !complete {
+        return interrupted(&plan, &scene, &acc);
+    }
+    let rendered = render_start.elapsed();
+    write(&plan, &acc)?;
+    if resumed && matches!(plan.target, Target::Image { .. }) {
+        // The image is whole: the sums it was resumed from are spent.
+        let _ = std::fs::remove_file(plan.stop_file());
+    }
+    let (times, threads) = ([loaded, built, rendered], pool.current_num_threads());
+    if !plan.quiet {
+        eprintln!("whitted: {}", summary(&plan, times, threads));
+    }
+    if let Some(format) = args.report.stats {
+        stats(args, &plan, &accel, &acc, times, threads).print(format);
+    }
+    Ok(Ended::Done)
+}
+
+/// Renders the plan's passes into `acc` from where it stands, joining `earlier` to it once the first
+/// pass is whole, and writes the output every `plan.every` passes before the last. Returns the sums
+/// and whether every pass is done: Ctrl-C stops the render at the next tile, keeping the complete
+/// passes, or in the first pass the tiles finished.
+fn render_passes(
+    plan: &Plan,
+    pool: &rayon::ThreadPool,
+    renderer: &Renderer,
+    progress: &Progress,
+    mut acc: Progressive,
+    mut earlier: Option<Progressive>,
+) -> whitted::Result<(Progressive, bool)> {
+    let passes = plan.passes();
+    let on_tile = || progress.tile();
+    for pass in passes.start + acc.passes() + 1..=passes.end {
+        progress.bar.set_message(label(plan, pass));
+        if let Err(stopped) = pool.install(|| acc.render_pass(renderer, pass, &on_tile, &STOP)) {
+            if acc.passes() == 0 {
+                acc = acc.keep_finished(&stopped);
+            }
+            return Ok((joined(earlier, acc), false));
+        }
+        acc = joined(earlier.take(), acc);
+        if acc.passes().is_multiple_of(plan.every) && pass < passes.end {
+            write(plan, &acc)?;
+        }
+    }
+    Ok((acc, true))
+}
+
+/// The progress bar's words for pass `pass`: the part and the pass, when there is more than one.
+fn label(plan: &Plan, pass: u32) -> String {
+    let mut label = Vec::new();
+    if let Some((k, n)) = plan.tiles {
+        label.push(format!("part {k}/{n}"));
+    }
+    if plan.total_passes > 1 {
+        label.push(format!("pass {pass}/{}", plan.total_passes));
+    }
+    label.join(", ")
+}
+
+/// After Ctrl-C: writes what is finished and says on stderr, even with `--quiet`, what was written
+/// and how to go on. The sums go to the stop file ([`Plan::stop_file`]) for `--resume`; an image render
+/// with whole passes also writes their mean as the image (and its snapshot).
+fn interrupted(plan: &Plan, scene: &Scene, acc: &Progressive) -> whitted::Result<Ended> {
+    let passes = plan.passes();
+    let (done, of) = (acc.passes(), passes.end - passes.start);
+    if done == 0 {
+        eprintln!("whitted: interrupted before any tile was finished; nothing written");
+        return Ok(Ended::Interrupted);
+    }
+    let stop = plan.stop_file();
+    let (tiles, all) = (acc.tile_indices().len(), plan.tile_indices().len());
+    let image = matches!(plan.target, Target::Image { .. });
+    if image {
+        let settings = PartSettings::new(scene, &plan.options, plan.total_passes);
+        write_sums(plan, &settings, acc, &stop)?;
+    }
+    if !image || tiles == all {
+        write(plan, acc)?;
+    }
+    let stop = stop.display();
+    let what = if tiles < all {
+        let first = match of {
+            1 => String::new(),
+            n => format!(" in the first of {n} passes"),
+        };
+        format!("{first}: wrote the {tiles} of {all} tiles finished to {stop}")
+    } else if image {
+        let out = plan.output.display();
+        format!(" after {done} of {of} passes: wrote their mean to {out} and their sums to {stop}")
+    } else {
+        format!(" after {done} of {of} passes: wrote their sums to {stop}")
+    };
+    eprintln!("whitted: interrupted{what}; the same command with --resume renders the rest");
+    Ok(Ended::Interrupted)
+}
+
+/// `--stats`' report of the passes in `acc`, rendered on `threads` threads in `times` (load, build,
+/// render).
+fn stats(
+    args: &RenderArgs,
+    plan: &Plan,
+    accel: &Accel,
+    acc: &Progressive,
+    times: [Duration; 3],
+    threads: usize,
+) -> Report {
+    let report = Report::new(
+        args.scene.as_deref(),
+        &plan.options,
+        accel,
+        threads,
+        times,
+        acc.rays(),
+    );
+    Report {
+        passes: acc.passes(),
+        ..report
+    }
+}
+
+/// The line printed after a render: size, times (load, build, render), accelerator, kernel, threads,
+/// passes and part.
+fn summary(plan: &Plan, [loaded, built, rendered]: [Duration; 3], threads: usize) -> String {
+    let passes = match plan.passes().len() {
+        1 => String::new(),
+        n => format!(", {n} passes"),
+    };
+    let part = match (plan.tiles, &plan.pass_range) {
+        (None, None) => String::new(),
+        (tiles, range) => {
+            let tiles = tiles.map(|(k, n)| format!("part {k}/{n}, "));
+            let range = range
+                .as_ref()
+                .map(|r| format!("passes {}..{} of {}, ", r.start, r.end, plan.total_passes));
+            format!(", {}{}", tiles.unwrap_or_default(), range.unwrap_or_default())
+                .trim_end_matches(", ")
+                .to_string()
+        }
+    };
+    let (width, height) = image_size(&plan.options);
+    format!(
+        "{width}x{height} in {:.3} s (load {:.3} s, build {:.3} s, accel {:?}, kernel {:?}, {threads} threads{passes}{part}) -> {}",
+        rendered.as_secs_f64(),
+        loaded.as_secs_f64(),
+        built.as_secs_f64(),
+        plan.accel,
+        plan.options.kernel,
+        plan.output.display()
+    )
+}

@@ -1,0 +1,57 @@
+//! What a render writes: the image and its snapshots, or the sums of its passes as a `.partial` file.
+
+use std::path::Path;
+
+use whitted::parts::partial::{Part, PartSettings};
+use whitted::render::film::Film;
+use whitted::render::progressive::Progressive;
+use whitted::render::{Options, spd};
+
+use super::args::RenderArgs;
+use super::plan::{Plan, Target};
+use crate::cli::outputs;
+
+/// Checks the files the render writes (the output, and the snapshots of `--progressive-out`), before
+/// the scene is loaded.
+pub fn check_outputs(args: &RenderArgs) -> whitted::Result<()> {
+    let partial = args.writes_partial();
+    outputs::check(&args.output, partial)?;
+    match &args.progressive_out {
+        Some(dir) if !partial && args.passes > 1 => outputs::check_snapshots(dir, &args.output),
+        _ => Ok(()),
+    }
+}
+
+/// Writes the sums or the mean so far to the output and, with `--progressive-out`, a numbered copy.
+pub fn write(plan: &Plan, acc: &Progressive) -> whitted::Result<()> {
+    let (srgb, snapshots) = match &plan.target {
+        Target::Partial { settings } => return write_sums(plan, settings, acc, &plan.output),
+        Target::Image { srgb, snapshots } => (*srgb, snapshots),
+    };
+    let film = image(&plan.options, acc.film());
+    film.write(&plan.output, srgb)?;
+    if let Some(dir) = snapshots {
+        film.write(&outputs::snapshot(dir, &plan.output, acc.passes()), srgb)?;
+    }
+    Ok(())
+}
+
+/// Writes the sums of `acc`, this run's part of the render of `settings`, as a `.partial` file.
+pub fn write_sums(
+    plan: &Plan,
+    settings: &PartSettings,
+    acc: &Progressive,
+    path: &Path,
+) -> whitted::Result<()> {
+    let part = Part::new(*settings, acc, plan.passes().start, plan.tiles.unwrap_or((0, 1)));
+    part.write(path)
+}
+
+/// The image of a frame rendered with `options`: an SPD frame's corners averaged into its pixels.
+fn image(options: &Options, film: Film) -> Film {
+    if options.spd {
+        spd::corners_to_pixels(&film)
+    } else {
+        film
+    }
+}

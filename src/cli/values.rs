@@ -1,0 +1,66 @@
+//! The parsers of the numbers and points the subcommands take.
+
+use glam::Vec3;
+
+/// A point or vector written `X,Y,Z`, each a finite number.
+pub fn point(s: &str) -> Result<Vec3, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    let [x, y, z] = parts[..] else {
+        return Err(format!(
+            "expected three numbers separated by commas, X,Y,Z (such as 0,1.5,-4), found \"{s}\""
+        ));
+    };
+    Ok(Vec3::new(number(x.trim())?, number(y.trim())?, number(z.trim())?))
+}
+
+/// A finite number.
+pub fn number(s: &str) -> Result<f32, String> {
+    let v: f32 = s
+        .parse()
+        .map_err(|_| format!("expected a number, found \"{s}\""))?;
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(format!("expected a finite number, found {s}"))
+    }
+}
+
+/// A finite number of at least 0.
+pub fn non_negative(s: &str) -> Result<f32, String> {
+    let v = number(s)?;
+    if v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("expected a number of at least 0, found {s}"))
+    }
+}
+
+/// A finite number above 0.
+pub fn positive(s: &str) -> Result<f32, String> {
+    let v = number(s)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("expected a number above 0, found {s}"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn points_are_three_finite_numbers_separated_by_commas() {
+        assert_eq!(point("1,2,3"), Ok(Vec3::new(1.0, 2.0, 3.0)));
+        assert_eq!(point(" -1.5 , 0,2e3 "), Ok(Vec3::new(-1.5, 0.0, 2000.0)));
+        let three = "expected three numbers separated by commas, X,Y,Z (such as 0,1.5,-4)";
+        assert_eq!(point("1,2"), Err(format!("{three}, found \"1,2\"")));
+        assert_eq!(point("1 2 3"), Err(format!("{three}, found \"1 2 3\"")));
+        assert_eq!(point("1,2,3,4"), Err(format!("{three}, found \"1,2,3,4\"")));
+        assert_eq!(point("1,x,3"), Err("expected a number, found \"x\"".to_string()));
+        assert_eq!(
+            point("1,inf,3"),
+            Err("expected a finite number, found inf".to_string())
+        );
+    }
+}

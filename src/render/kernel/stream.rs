@@ -1,0 +1,399 @@
+//! The stream kernel ([`Kernel::Stream`](crate::render::Kernel::Stream)): the pixel
+//! samples of a few tiles are traced together, generation by generation. A generation's rays (and then
+//! its hits' shadow rays, light by light) go eight at a time as a packet where eight consecutive rays
+//! share a direction octant, and all the others as one stream through the accelerators' stream verbs
+//! ([`crate::accel::Accel::intersect_stream`], [`crate::accel::Accel::occluded_stream`]). On the wide
+//! BVHs a stream goes down the tree split at each node (Barringer and Akenine-Möller 2014), so a node
+//! is loaded once for all the rays that reach it, where the single-ray kernel loads it once a ray.
+//!
+//! The image is the single-ray path's, bit for bit. Each pixel sample walks its ray tree depth first, as
+//! [`Whitted::trace`] recurses (a hit's bounce, then its refracted ray's tree, then its reflected ray's),
+//! and puts one ray into each generation's stream: its next ray in that order. So its random numbers
+//! (fuzzy reflections) are drawn and its split budget spent in the single-ray order; a hit's colour is
+//! [`Whitted::shade_surface`] of the same rays, once its shadow rays and its children's colours are
+//! back; a pixel's samples are summed in sample order.
+
+use std::cell::RefCell;
+
+use glam::Vec3;
+
+use super::{BLOCK_H, BLOCK_W, TilePixels, coherent};
+use crate::accel::packet::first;
+use crate::accel::{Hit, PACKET, Surface};
+use crate::geometry::ray::Ray;
+use crate::render::renderer::Renderer;
+use crate::render::sampler::PixelPattern;
+use crate::render::tiles::{TILE, Tile};
+use crate::render::whitted::{Bounces, PixelSample, RayCounts, ShadowRay};
+
+/// The most pixel samples in flight at once: past this (many samples per pixel), a set of tiles is
+/// traced in batches of whole pixels' samples, so that a worker's state stays bounded (about 130 bytes
+/// a sample and 200 a pending ray: a few MiB at most).
+const BATCH: usize = 4096;
+
+/// No node: a sample's root ray has no parent.
+const NONE: u32 = u32::MAX;
+
+/// A ray of some sample's tree whose colour is not known yet: what its hit spawned, and what has come
+/// back of it.
+#[derive(Clone, Copy, Debug)]
+struct RayNode {
+    ray: Ray,
+    /// Bounces before this ray.
+    depth: u32,
+    /// The sample it belongs to.
+    sample: u32,
+    /// The ray that spawned it, and which of that ray's children it is (0 refracted, 1 reflected).
+    parent: u32,
+    slot: u8,
+    /// Where its closest hit lies (`None`: it left the scene).
+    surface: Option<Surface>,
+    bounces: Bounces,
+    /// Its shadow rays' answers, from here on in the batch's list, in light order.
+    shadows: usize,
+    /// What its refracted and reflected rays see.
+    seen: [Vec3; 2],
+}
+
+/// A pixel sample of the batch: what it carries down its tree, where its colour goes, and the colour.
+struct Walk<'a> {
+    sample: PixelSample<'a>,
+    /// Its pixel's slot: tile (within the set) and pixel (within the tile's buffer).
+    tile: u32,
+    pixel: u32,
+    color: Vec3,
+}
+
+/// A worker's buffers, kept from batch to batch (nothing is allocated per ray).
+#[derive(Default)]
+struct StreamBuffers {
+    nodes: Vec<RayNode>,
+    free: Vec<u32>,
+    /// The nodes whose rays the next generation traces, in sample order.
+    queue: Vec<u32>,
+    next: Vec<u32>,
+    rays: Vec<Ray>,
+    hits: Vec<Hit>,
+    shadow_rays: Vec<Ray>,
+    shadow_t: Vec<f32>,
+    /// Each shadow ray's light sample.
+    shadow_light: Vec<u32>,
+    /// The rays to trace in order (the generation's in sample order, its shadow rays light by
+    /// light), where each run of them ends, and the count of each light's shadow rays.
+    order: Vec<u32>,
+    runs: Vec<u32>,
+    per_light: Vec<u32>,
+    /// The rays of the order that go as one stream, and their rays, limits and answers.
+    stream: Vec<u32>,
+    stream_rays: Vec<Ray>,
+    stream_t: Vec<f32>,
+    stream_hits: Vec<Hit>,
+    stream_blocked: Vec<bool>,
+    blocked: Vec<bool>,
+}
+
+impl StreamBuffers {
+    /// A node for `ray`, reusing a finished one's slot.
+    fn add(&mut self, node: RayNode) -> u32 {
+        match self.free.pop() {
+            Some(i) => {
+                self.nodes[i as usize] = node;
+                i
+            }
+            None => {
+                self.nodes.push(node);
+                (self.nodes.len() - 1) as u32
+            }
+        }
+    }
+}
+
+impl Renderer<'_> {
+    /// Renders `tiles` for pass `pass` as streams into `bufs` (one per tile) and counts each tile's
+    /// rays into `counts`, with the calling worker's buffers, kept from job to job.
+    pub(in crate::render) fn tiles_streamed(
+        &self,
+        tiles: &[Tile],
+        pass: u32,
+        bufs: &mut [TilePixels],
+        counts: &mut [RayCounts],
+    ) {
+        thread_local! {
+            static BUFFERS: RefCell<StreamBuffers> = RefCell::default();
+        }
+        BUFFERS.with_borrow_mut(|b| self.trace_tiles(tiles, pass, bufs, counts, b));
+    }
+
+    /// [`Renderer::tiles_streamed`] with the buffers `b`.
+    fn trace_tiles(
+        &self,
+        tiles: &[Tile],
+        pass: u32,
+        bufs: &mut [TilePixels],
+        counts: &mut [RayCounts],
+        b: &mut StreamBuffers,
+    ) {
+        let samples = self.samples() as usize;
+        // Pixels tile by tile, in blocks of 4x2 within a tile (eight neighbours, so that eight
+        // consecutive camera rays make a coherent packet), cut into batches of whole pixels.
+        let mut pixels = Vec::with_capacity(tiles.len() * (TILE * TILE) as usize);
+        for (t, tile) in tiles.iter().enumerate() {
+            for y0 in (tile.y0..tile.y1).step_by(BLOCK_H as usize) {
+                for x0 in (tile.x0..tile.x1).step_by(BLOCK_W as usize) {
+                    for k in 0..PACKET as u32 {
+                        let (x, y) = (x0 + k % BLOCK_W, y0 + k / BLOCK_W);
+                        if x < tile.x1 && y < tile.y1 {
+                            pixels.push((t as u32, x, y));
+                        }
+                    }
+                }
+            }
+        }
+        let per_batch = (BATCH / samples).max(1);
+        let mut pattern = PixelPattern::default();
+        let mut walks = Vec::with_capacity(per_batch * samples);
+        for batch in pixels.chunks(per_batch) {
+            walks.clear();
+            b.nodes.clear();
+            b.free.clear();
+            b.queue.clear();
+            b.blocked.clear();
+            for &(t, x, y) in batch {
+                let tile = tiles[t as usize];
+                let pixel = (y - tile.y0) * TILE + (x - tile.x0);
+                self.fill_pattern(x, y, pass, &mut pattern);
+                for s in 0..samples as u32 {
+                    let (ray, sample) = self.camera_sample(x, y, pass, s, &pattern);
+                    let id = walks.len() as u32;
+                    walks.push(Walk {
+                        sample,
+                        tile: t,
+                        pixel,
+                        color: Vec3::ZERO,
+                    });
+                    let node = b.add(root(ray, id));
+                    b.queue.push(node);
+                }
+            }
+            self.walk(&mut walks, b);
+            // Each pixel's samples summed in sample order, as the other kernels sum them.
+            for pixel in walks.chunks_mut(samples) {
+                let mut sum = Vec3::ZERO;
+                for w in pixel.iter_mut() {
+                    sum += w.color;
+                    w.sample.rays.primary += 1;
+                    counts[w.tile as usize] += w.sample.rays;
+                }
+                bufs[pixel[0].tile as usize][pixel[0].pixel as usize] = sum / samples as f32;
+            }
+        }
+    }
+
+    /// Traces the batch's trees generation by generation until every sample has its colour. In each
+    /// generation, eight consecutive rays that share a direction octant go as a packet (eight
+    /// neighbouring pixels' camera rays, or one pixel's samples; a light's shadow rays from them; their
+    /// rays off a flat mirror), and the others, in any directions, as one stream.
+    fn walk(&self, walks: &mut [Walk], b: &mut StreamBuffers) {
+        let whitted = &self.whitted;
+        while !b.queue.is_empty() {
+            b.rays.clear();
+            b.rays.extend(b.queue.iter().map(|&n| b.nodes[n as usize].ray));
+            b.hits.clear();
+            b.hits.resize(b.rays.len(), Hit::miss(f32::INFINITY));
+            b.order.clear();
+            b.order.extend(0..b.rays.len() as u32);
+            b.runs.clear();
+            b.runs.push(b.rays.len() as u32);
+            self.trace_split::<false>(b, 0);
+            // Each hit's surface, bounces (in each sample's single-ray order: one ray a sample) and
+            // shadow rays.
+            b.shadow_rays.clear();
+            b.shadow_t.clear();
+            b.shadow_light.clear();
+            for (j, &n) in b.queue.iter().enumerate() {
+                let node = &mut b.nodes[n as usize];
+                let hit = b.hits[j];
+                if !hit.is_hit() {
+                    continue;
+                }
+                let walk = &mut walks[node.sample as usize];
+                walk.sample.rays.primary_hits += u64::from(node.depth == 0);
+                let s = whitted.prims.surface(&node.ray, &hit);
+                node.bounces = whitted.bounces(&node.ray, &s, node.depth, &mut walk.sample);
+                walk.sample.rays.add_bounces(&node.bounces);
+                node.surface = Some(s);
+                node.shadows = b.blocked.len() + b.shadow_rays.len();
+                for (i, light) in walk.sample.lights.iter().enumerate() {
+                    if let Some(shadow) = ShadowRay::new(s.point, s.geometric, s.shading, &light) {
+                        b.shadow_rays.push(shadow.ray);
+                        b.shadow_t.push(shadow.distance);
+                        b.shadow_light.push(i as u32);
+                    }
+                }
+                walk.sample.rays.shadow += (b.blocked.len() + b.shadow_rays.len() - node.shadows) as u64;
+            }
+            let start = b.blocked.len();
+            b.blocked.resize(start + b.shadow_rays.len(), false);
+            by_light(b);
+            self.trace_split::<true>(b, start);
+            // Each sample's next ray, or its finished rays' colours, up its tree.
+            let queue = std::mem::take(&mut b.queue);
+            b.next.clear();
+            for &n in &queue {
+                self.advance(n, 0, walks, b);
+            }
+            b.queue = queue;
+            std::mem::swap(&mut b.queue, &mut b.next);
+        }
+    }
+
+    /// Traces the rays of `b.order`, run by run (`b.runs`: where each ends): the generation's rays
+    /// (closest hits into `b.hits`) or, with `ANY`, its shadow rays (answers into `b.blocked` from
+    /// `start` on). Each run is cut into chunks of eight; a chunk that is [`coherent`] is traced as a
+    /// packet (the packet driver's rule), the others' rays together as one stream.
+    fn trace_split<const ANY: bool>(&self, b: &mut StreamBuffers, start: usize) {
+        let accel = self.whitted.accel;
+        let rays = if ANY { &b.shadow_rays } else { &b.rays };
+        b.stream.clear();
+        let mut from = 0;
+        for &end in &b.runs {
+            for ids in b.order[from as usize..end as usize].chunks(PACKET) {
+                if !coherent(ids.iter().map(|&j| &rays[j as usize])) {
+                    b.stream.extend_from_slice(ids);
+                    continue;
+                }
+                let mut packet = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
+                for (k, &j) in ids.iter().enumerate() {
+                    packet[k] = rays[j as usize];
+                }
+                if ANY {
+                    let t_max: [f32; PACKET] =
+                        std::array::from_fn(|k| ids.get(k).map_or(0.0, |&j| b.shadow_t[j as usize]));
+                    let blocked = accel.occluded_packet(&packet, first(ids.len()), 0.0, &t_max);
+                    for (k, &j) in ids.iter().enumerate() {
+                        b.blocked[start + j as usize] = blocked >> k & 1 == 1;
+                    }
+                } else {
+                    let mut hits = [Hit::miss(f32::INFINITY); PACKET];
+                    accel.intersect_packet(&packet, first(ids.len()), 0.0, &mut hits);
+                    for (k, &j) in ids.iter().enumerate() {
+                        b.hits[j as usize] = hits[k];
+                    }
+                }
+            }
+            from = end;
+        }
+        // The rest as one stream, gathered and scattered back.
+        b.stream_rays.clear();
+        b.stream_rays.extend(b.stream.iter().map(|&j| rays[j as usize]));
+        if ANY {
+            b.stream_t.clear();
+            b.stream_t
+                .extend(b.stream.iter().map(|&j| b.shadow_t[j as usize]));
+            b.stream_blocked.clear();
+            b.stream_blocked.resize(b.stream.len(), false);
+            accel.occluded_stream(&b.stream_rays, 0.0, &b.stream_t, &mut b.stream_blocked);
+            for (&j, &blocked) in b.stream.iter().zip(&b.stream_blocked) {
+                b.blocked[start + j as usize] = blocked;
+            }
+        } else {
+            b.stream_hits.clear();
+            b.stream_hits.resize(b.stream.len(), Hit::miss(f32::INFINITY));
+            accel.intersect_stream(&b.stream_rays, 0.0, &mut b.stream_hits);
+            for (&j, &hit) in b.stream.iter().zip(&b.stream_hits) {
+                b.hits[j as usize] = hit;
+            }
+        }
+    }
+
+    /// After node `n`'s hit and shadow rays are back, or its child in `slot - 1` has its colour:
+    /// queues its next child (refracted, then reflected), or else shades it, frees it and goes on up
+    /// its tree with the colour.
+    fn advance(&self, mut n: u32, mut from: u8, walks: &mut [Walk], b: &mut StreamBuffers) {
+        loop {
+            let node = &b.nodes[n as usize];
+            let (sample, depth, parent, slot) = (node.sample, node.depth, node.parent, node.slot);
+            let children = [&node.bounces.refracted, &node.bounces.reflected];
+            if let Some(next) = (from..2).find(|&i| children[i as usize].is_some()) {
+                let (ray, _) = children[next as usize].expect("found");
+                let child = b.add(RayNode {
+                    parent: n,
+                    slot: next,
+                    depth: depth + 1,
+                    ..root(ray, sample)
+                });
+                b.next.push(child);
+                return;
+            }
+            // Read in place, not copied: a node is some 200 bytes.
+            let walk = &mut walks[sample as usize];
+            let color = match &node.surface {
+                // A miss: what the ray sees leaving the scene.
+                None => self
+                    .whitted
+                    .shade(&node.ray, &Hit::miss(f32::INFINITY), depth, &mut walk.sample),
+                Some(s) => {
+                    let (mut shadow, blocked) = (node.shadows, &b.blocked);
+                    self.whitted.shade_surface(
+                        &node.ray,
+                        s,
+                        &node.bounces,
+                        &walk.sample.lights,
+                        &mut |_, _| {
+                            shadow += 1;
+                            blocked[shadow - 1]
+                        },
+                        &mut |i, _| node.seen[i],
+                    )
+                }
+            };
+            b.free.push(n);
+            if parent == NONE {
+                walk.color = color;
+                return;
+            }
+            (n, from) = (parent, slot + 1);
+            b.nodes[n as usize].seen[slot as usize] = color;
+        }
+    }
+}
+
+/// Puts the generation's shadow rays in order of light, one run per light (a counting sort: stable, so
+/// each light's rays stay in the order of their hits, neighbours beside neighbours).
+fn by_light(b: &mut StreamBuffers) {
+    let lights = b.shadow_light.iter().max().map_or(0, |&l| l as usize + 1);
+    b.per_light.clear();
+    b.per_light.resize(lights, 0);
+    for &l in &b.shadow_light {
+        b.per_light[l as usize] += 1;
+    }
+    // Each light's first slot, then (as rays are placed) its next.
+    b.runs.clear();
+    let mut at = 0;
+    for count in b.per_light.iter_mut() {
+        (*count, at) = (at, at + *count);
+        b.runs.push(at);
+    }
+    b.order.clear();
+    b.order.resize(b.shadow_light.len(), 0);
+    for (j, &l) in b.shadow_light.iter().enumerate() {
+        let next = &mut b.per_light[l as usize];
+        b.order[*next as usize] = j as u32;
+        *next += 1;
+    }
+}
+
+/// The root node of sample `sample`'s tree: its camera ray (or a child's ray, the rest filled in).
+fn root(ray: Ray, sample: u32) -> RayNode {
+    RayNode {
+        ray,
+        depth: 0,
+        sample,
+        parent: NONE,
+        slot: 0,
+        surface: None,
+        bounces: Bounces::default(),
+        shadows: 0,
+        seen: [Vec3::ZERO; 2],
+    }
+}

@@ -1,0 +1,171 @@
+//! A frame's set-up: the [`Renderer`] holds the integrator, the camera and the sampling options, and
+//! makes each pixel sample's camera ray and what it carries; the kernels (`super::kernel`) trace them
+//! and `super::frame` schedules the tiles.
+//!
+//! At `spp` 0 each pixel gets one ray through its centre and quad lights their regular grids of point
+//! lights (the course's model). With `spp` = n² > 0 each pixel averages n × n jittered samples, each
+//! with its own lens point (depth of field), its paired, shuffled light point on every quad light (soft
+//! shadows) and its own random numbers for fuzzy reflections ([`super::sampler`]); progressive rendering
+//! averages passes of one such sample ([`super::progressive`]).
+
+use glam::{Vec2, Vec3};
+
+use super::camera::RayCamera;
+use super::env::Background;
+use super::options::Options;
+use super::sampler::{PixelPattern, Sampler};
+use super::whitted::{PixelSample, RayCounts, Whitted};
+use crate::accel::Accel;
+use crate::geometry::ray::Ray;
+use crate::scene::{Camera, Scene};
+
+/// A frame: the integrator, the camera, the samples per pixel and the options; set up once per frame
+/// and shared read-only by the workers.
+pub struct Renderer<'a> {
+    pub(super) whitted: Whitted<'a>,
+    camera: RayCamera,
+    /// Samples per pixel side: n × n per pixel, 0 for one ray through the centre.
+    side: u32,
+    /// Where a pixel's one ray goes at spp 0, from its top-left corner: 0.5 (its centre), or 0 for
+    /// corner rays.
+    centre: f32,
+    pub(super) options: Options,
+    /// What the renderer fell back on (a skybox that did not load, say), for the user to see.
+    pub warnings: Vec<String>,
+}
+
+impl<'a> Renderer<'a> {
+    /// Prepares a frame of `scene` through `accel`, its skybox read from disk ([`Background::load`]).
+    pub fn new(scene: &'a Scene, accel: &'a Accel<'a>, options: Options) -> Self {
+        let (background, warning) = Background::load(scene);
+        let mut renderer = Renderer::with_view(scene, accel, options, &scene.camera, background);
+        renderer.warnings.splice(0..0, warning);
+        renderer
+    }
+
+    /// A frame of `scene` through `accel`, seen through `camera` instead of the scene's, against
+    /// `background`: for a viewer that renders again at every camera move or change of setting and
+    /// reads the skybox once (clones of a background share its images). Its warnings are about
+    /// `options` and `camera`.
+    pub fn with_view(
+        scene: &'a Scene,
+        accel: &'a Accel<'a>,
+        options: Options,
+        camera: &Camera,
+        background: Background,
+    ) -> Self {
+        let mut warnings = Vec::new();
+        let side = options.side();
+        if options.spp_taken() != options.spp {
+            warnings.push(format!(
+                "{} samples per pixel is not a square: taking {side} x {side} = {}",
+                options.spp,
+                options.spp_taken()
+            ));
+        }
+        if side == 0 && camera.aperture > 0.0 {
+            warnings.push(
+                "depth of field needs samples (spp 1 or more): rendering through a pinhole".to_string(),
+            );
+        }
+        let whitted = Whitted::new(
+            scene,
+            accel,
+            background,
+            side > 0,
+            options.max_depth,
+            options.roughness,
+            options.spd,
+        );
+        Renderer {
+            whitted,
+            // At spp 0 the camera rays go through the pixel centres from the eye (a pinhole).
+            camera: if options.spd {
+                // Corners 0..=w of a w-pixel-wide image: the camera of the image, rays at whole
+                // pixel coordinates.
+                RayCamera::new(camera, options.width.max(2) - 1, options.height.max(2) - 1)
+            } else {
+                RayCamera::new(camera, options.width, options.height)
+            },
+            side,
+            centre: if options.spd { 0.0 } else { 0.5 },
+            options,
+            warnings,
+        }
+    }
+
+    /// Quad lights as their regular grids of point lights whatever the samples per pixel, as at spp 0:
+    /// hard-edged, banded shadows without noise (the viewer's soft-shadow switch).
+    pub fn with_regular_lights(mut self) -> Self {
+        self.whitted = self.whitted.with_regular_lights();
+        self
+    }
+
+    /// The image size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.options.width, self.options.height)
+    }
+
+    /// The light samples and random numbers of sample `s` of pixel `index` in pass `pass` (the light
+    /// point `uv` is the sample's paired point of the pattern; unused at spp 0).
+    #[inline]
+    pub(super) fn pixel_sample(&self, pass: u32, index: u64, s: u32, uv: Vec2) -> PixelSample<'_> {
+        PixelSample {
+            lights: self.whitted.lights(uv),
+            rng: Sampler::new(self.options.seed, pass, index, 1 + s),
+            rays: RayCounts::default(),
+        }
+    }
+
+    /// Sample `s` of pixel `(x, y)`: its camera ray and what it carries (the pattern must be the
+    /// pixel's, filled for this pass).
+    pub(super) fn camera_sample(
+        &self,
+        x: u32,
+        y: u32,
+        pass: u32,
+        s: u32,
+        pattern: &PixelPattern,
+    ) -> (Ray, PixelSample<'_>) {
+        let index = u64::from(y) * u64::from(self.options.width) + u64::from(x);
+        let (x, y) = (x as f32, y as f32);
+        if self.side == 0 {
+            return (
+                self.camera.ray(x + self.centre, y + self.centre),
+                self.pixel_sample(pass, index, 0, Vec2::splat(0.5)),
+            );
+        }
+        let (p, uv) = (pattern.pixel[s as usize], pattern.light[s as usize]);
+        let mut sample = self.pixel_sample(pass, index, s, uv);
+        // The lens point's two numbers are drawn even for a pinhole, so that a sample's later random
+        // numbers do not depend on the camera; only a lens maps them onto the disc (the map's sine
+        // and cosine were a third of a pinhole camera ray's instructions: profiles/frame.txt).
+        let lens = if self.camera.has_lens() {
+            sample.rng.in_unit_disc()
+        } else {
+            sample.rng.next2();
+            Vec2::ZERO
+        };
+        (self.camera.lens_ray(x + p.x, y + p.y, lens), sample)
+    }
+
+    /// Samples per pixel actually taken (at least one).
+    pub(super) fn samples(&self) -> u32 {
+        (self.side * self.side).max(1)
+    }
+
+    /// Fills `pattern` for pixel `(x, y)` in pass `pass` (nothing to fill at spp 0).
+    pub(super) fn fill_pattern(&self, x: u32, y: u32, pass: u32, pattern: &mut PixelPattern) {
+        if self.side > 0 {
+            let index = u64::from(y) * u64::from(self.options.width) + u64::from(x);
+            pattern.fill(self.side, self.options.seed, pass, index);
+        }
+    }
+
+    /// What `ray` sees from the eye (depth 0), with the first sample's light points and random numbers
+    /// of pixel 0: for probing the shading with rays of one's own.
+    pub fn radiance(&self, ray: &Ray) -> Vec3 {
+        self.whitted
+            .trace(ray, 0, &mut self.pixel_sample(1, 0, 0, Vec2::splat(0.5)))
+    }
+}

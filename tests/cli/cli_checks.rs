@@ -1,0 +1,122 @@
+//! `whitted render` refuses what it could not finish before it starts: an output it could not write
+//! (checked before the scene is even loaded), a frame larger than the memory it may use (under a real
+//! `ulimit -v`), a thread count out of range (a usage error, never a panic).
+
+use std::path::Path;
+use std::process::Command;
+
+use crate::common::{self, fails};
+
+/// A bad output is named before the scene is loaded: the scene here does not exist, and the error is
+/// about the output all the same.
+#[test]
+fn a_bad_output_is_refused_before_the_scene_is_loaded() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let at = |name: &str| d.join(name).to_string_lossy().into_owned();
+    let render = |args: &[&str]| fails(&[&["render", "no-such-scene.p3f"][..], args].concat(), 1);
+
+    let gif = at("out.gif");
+    assert_eq!(
+        render(&["-o", &gif]),
+        format!(
+            "whitted: {gif}: unknown image format: expected a .png, .ppm, .jpg, .jpeg or .exr file name\n"
+        )
+    );
+    let missing = at("missing_dir/out.png");
+    assert_eq!(
+        render(&["-o", &missing]),
+        format!(
+            "whitted: {missing}: the directory {} does not exist\n",
+            at("missing_dir")
+        )
+    );
+    // A directory where the image would go is not replaced.
+    std::fs::create_dir(d.join("taken.png")).unwrap();
+    let taken = at("taken.png");
+    assert_eq!(
+        render(&["-o", &taken]),
+        format!(
+            "whitted: {taken}: is not a regular file (a directory, a link or a device); refusing to replace it\n"
+        )
+    );
+    // --progressive-out: its directory is made before the scene is loaded; a file in its way is named.
+    std::fs::write(d.join("file"), "").unwrap();
+    let err = render(&[
+        "-o",
+        &at("ok.png"),
+        "--passes",
+        "2",
+        "--progressive-out",
+        &at("file"),
+    ]);
+    assert!(
+        err.starts_with(&format!("whitted: {}: cannot create the directory: ", at("file"))),
+        "{err}"
+    );
+    // A .partial output may have any name; the scene is the next thing that fails.
+    let err = render(&["-o", &at("out.gif"), "--partial"]);
+    assert!(err.contains("no-such-scene.p3f"), "{err}");
+    let entries: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(
+        entries.len(),
+        2,
+        "only the directory and the file made here: {entries:?}"
+    );
+}
+
+/// Under `ulimit -v 4000000` (about 3.8 GiB of address space) a 16384 x 16384 frame, which needs 10.5
+/// GiB at 42 bytes a pixel, is refused with both sizes before anything is allocated: exit status 1, not
+/// an abort, and no output.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_frame_larger_than_the_memory_limit_is_refused_with_both_sizes() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("huge.p3f");
+    std::fs::write(
+        &scene,
+        "v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0.01\nresolution 16384 16384\n\
+         l 0 5 5\nf 1 1 1 1 0 0 0 0\ns 0 0 0 1\n",
+    )
+    .unwrap();
+    let out = dir.path().join("huge.png");
+    let run = Command::new("sh")
+        .args(["-c", "ulimit -v 4000000 && exec \"$0\" \"$@\""])
+        .arg(env!("CARGO_BIN_EXE_whitted"))
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = common::failed(&run, 1);
+    // What is available is what the limit leaves of it after the process's own address space: below
+    // 4,096,000,000 bytes (3.81 GiB).
+    let prefix = "whitted: a 16384x16384 frame needs 10.50 GiB (42 bytes a pixel) and only ";
+    let suffix = " GiB is available: lower the resolution, or render it in parts (--tiles K/N)\n";
+    assert!(err.starts_with(prefix) && err.ends_with(suffix), "{err}");
+    let available: f64 = err[prefix.len()..err.len() - suffix.len()].parse().unwrap();
+    assert!(available > 0.0 && available < 3.82, "{err}");
+    assert!(!out.exists());
+    assert!(!Path::new(&format!("{}.partial", out.display())).exists());
+}
+
+/// `--threads` out of 1..=1024 is a usage error (exit status 2) in one line, for every subcommand that
+/// takes it, before anything is loaded; 100000 used to print a panic of the standard library first.
+#[test]
+fn threads_out_of_range_are_a_usage_error() {
+    for command in ["render", "bench"] {
+        for n in ["0", "100000"] {
+            let err = fails(&[command, "no-such-scene.p3f", "--threads", n], 2);
+            assert!(
+                err.starts_with(&format!(
+                    "error: invalid value '{n}' for '--threads <THREADS>': {n} is not in 1..=1024\n"
+                )),
+                "{command} --threads {n}: {err}"
+            );
+        }
+    }
+}

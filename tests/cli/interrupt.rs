@@ -1,0 +1,215 @@
+//! Ctrl-C during `whitted render`: what is finished is written, stderr says what and how to go on, the
+//! exit status is 130, and `--resume` with the same arguments finishes the very image an
+//! uninterrupted render makes.
+#![cfg(target_os = "linux")]
+
+use std::path::Path;
+use std::process::{Child, Command, Output, Stdio};
+use std::time::Duration;
+
+use crate::common;
+
+/// Starts `whitted ARGS` with stderr piped (so no progress bar is drawn).
+fn spawn(args: &[&str]) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_whitted"))
+        .args(args)
+        .current_dir(common::root())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// Field `n` (from 1) of `/proc/PID/stat`, after the command name (which may hold spaces).
+fn stat_field(pid: u32, n: usize) -> Option<u64> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    let after_name = &stat[stat.rfind(')')? + 2..];
+    after_name.split(' ').nth(n - 3)?.parse().ok()
+}
+
+/// CPU time the process has used, in clock ticks (utime + stime).
+fn cpu_ticks(pid: u32) -> u64 {
+    stat_field(pid, 14).unwrap_or(0) + stat_field(pid, 15).unwrap_or(0)
+}
+
+/// Whether the process catches SIGINT (its Ctrl-C handler is installed, just before it renders).
+fn catches_sigint(pid: u32) -> bool {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap_or_default();
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("SigCgt:"))
+        .and_then(|mask| u64::from_str_radix(mask.trim(), 16).ok())
+        .is_some_and(|mask| mask & (1 << (libc::SIGINT - 1)) != 0)
+}
+
+/// Waits (polling, 10,000 times at most) until `child` catches SIGINT and has then used `ticks` more
+/// clock ticks of CPU time rendering, sends it SIGINT, and returns how it ended. Work done, not time
+/// passed, decides when: the render has finished some tiles however loaded the machine is.
+fn interrupt_after(child: Child, ticks: u64) -> Output {
+    let pid = child.id();
+    let mut polls = 0;
+    let mut poll = |what: &str| {
+        polls += 1;
+        assert!(polls < 10_000, "gave up waiting for {what}");
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    while !catches_sigint(pid) {
+        poll("the Ctrl-C handler");
+    }
+    let start = cpu_ticks(pid);
+    while cpu_ticks(pid) < start + ticks {
+        poll("the render's CPU time");
+    }
+    assert_eq!(unsafe { libc::kill(pid as libc::pid_t, libc::SIGINT) }, 0);
+    child.wait_with_output().unwrap()
+}
+
+/// Starts `whitted ARGS`, interrupts it after 10 clock ticks of rendering, and returns its stderr, after
+/// checking that it exited with status 130.
+fn interrupted(args: &[&str]) -> String {
+    let result = interrupt_after(spawn(args), 10);
+    let err = String::from_utf8(result.stderr).unwrap();
+    assert_eq!(result.status.code(), Some(130), "{err}");
+    err
+}
+
+/// Runs `whitted ARGS`, which must succeed; returns its stderr.
+fn run(args: &[&str]) -> String {
+    let out = common::whitted(args);
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(out.status.success(), "{args:?}: {err}");
+    err
+}
+
+/// The number in `text` between `before` and `after`.
+fn number_between(text: &str, before: &str, after: &str) -> u32 {
+    let start = text
+        .find(before)
+        .unwrap_or_else(|| panic!("no \"{before}\" in {text}"))
+        + before.len();
+    let len = text[start..]
+        .find(after)
+        .unwrap_or_else(|| panic!("no \"{after}\" in {text}"));
+    text[start..start + len].parse().unwrap()
+}
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// A one-pass render interrupted keeps its finished tiles in `OUT.partial` (even with `-q`, stderr
+/// says so); `--resume` renders the others and writes the same bytes as an uninterrupted render, then
+/// removes `OUT.partial`.
+#[test]
+fn an_interrupted_render_keeps_its_tiles_and_resumes_into_the_same_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("one.png").to_string_lossy().into_owned();
+    // The default scene at 320 x 240 (20 x 15 = 300 tiles), 36 samples a pixel, on one thread: seconds
+    // of work, of which a tenth of a second is done when Ctrl-C comes.
+    let args = [
+        "render",
+        "--width",
+        "320",
+        "--spp",
+        "36",
+        "--threads",
+        "1",
+        "-q",
+        "-o",
+        &out,
+    ];
+    let err = interrupted(&args);
+    let finished = number_between(&err, "whitted: interrupted: wrote the ", " of 300 tiles finished");
+    assert!((1..300).contains(&finished), "{err}");
+    assert_eq!(
+        err,
+        format!(
+            "whitted: interrupted: wrote the {finished} of 300 tiles finished to {out}.partial; the same \
+             command with --resume renders the rest\n"
+        )
+    );
+    assert_eq!(names(dir.path()), ["one.png.partial"]);
+
+    let resumed = run(&[&args[..], &["--resume"]].concat());
+    assert_eq!(resumed, "", "-q: nothing to say");
+    assert_eq!(names(dir.path()), ["one.png"], "the .partial file is spent");
+    let whole = dir.path().join("whole.png").to_string_lossy().into_owned();
+    run(&["render", "--width", "320", "--spp", "36", "-q", "-o", &whole]);
+    assert!(
+        std::fs::read(&out).unwrap() == std::fs::read(&whole).unwrap(),
+        "the resumed image differs from the uninterrupted one"
+    );
+}
+
+/// A progressive render interrupted writes the mean of its whole passes as the image (the same bytes
+/// as `--passes K` for the K it reports, and its snapshot), their sums in `OUT.partial`, and exits 130;
+/// `--resume` renders the passes left into the image of the uninterrupted render.
+#[test]
+fn an_interrupted_progressive_render_writes_its_passes_and_resumes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("c.png").to_string_lossy().into_owned();
+    let snaps = d.join("snaps").to_string_lossy().into_owned();
+    // 64 x 48 at one sample a pass on one thread: some milliseconds a pass, 1000 passes.
+    let args = [
+        "render",
+        "--width",
+        "64",
+        "--spp",
+        "1",
+        "--passes",
+        "1000",
+        "--threads",
+        "1",
+        "-o",
+        &out,
+        "--progressive-out",
+        &snaps,
+    ];
+    let err = interrupted(&args);
+    let k = number_between(&err, "whitted: interrupted after ", " of 1000 passes");
+    assert!((1..1000).contains(&k), "{err}");
+    assert_eq!(
+        err,
+        format!(
+            "whitted: interrupted after {k} of 1000 passes: wrote their mean to {out} and their sums to \
+             {out}.partial; the same command with --resume renders the rest\n"
+        )
+    );
+    assert_eq!(
+        names(d),
+        ["c.png", "c.png.partial", "snaps"],
+        "no temporary file left"
+    );
+    let image = std::fs::read(&out).unwrap();
+    assert!(image == std::fs::read(d.join(format!("snaps/c-{k:04}.png"))).unwrap());
+    let reference = d.join("k.png").to_string_lossy().into_owned();
+    let k_text = k.to_string();
+    run(&[
+        "render", "--width", "64", "--spp", "1", "--passes", &k_text, "-q", "-o", &reference,
+    ]);
+    assert!(
+        image == std::fs::read(&reference).unwrap(),
+        "not the mean of {k} passes"
+    );
+
+    let resumed = run(&[&args[..], &["--resume"]].concat());
+    assert!(
+        resumed.starts_with(&format!(
+            "whitted: resuming from {out}.partial: {k} of 1000 passes done\n"
+        )),
+        "{resumed}"
+    );
+    assert_eq!(names(d), ["c.png", "k.png", "snaps"]);
+    run(&[
+        "render", "--width", "64", "--spp", "1", "--passes", "1000", "-q", "-o", &reference,
+    ]);
+    assert!(
+        std::fs::read(&out).unwrap() == std::fs::read(&reference).unwrap(),
+        "the resumed image differs from the uninterrupted one"
+    );
+}

@@ -1,0 +1,13 @@
+//! The command line, run as a user runs it: refusals before any work (`cli_checks`), the reports of
+//! `info`, `bench` and `render --stats` parsed as a script reads them (`cli_report`), every documented
+//! option by a value it must change or keep (`options`), Ctrl-C and `--resume` (`interrupt`), and
+//! split renders merged (`scale_out`).
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod cli_checks;
+mod cli_report;
+mod interrupt;
+mod options;
+mod scale_out;

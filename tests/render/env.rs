@@ -1,0 +1,331 @@
+//! The skybox (`env DIR`, `src/render/env.rs`) against closed forms written here, not taken from the
+//! renderer.
+//!
+//! `scenes/skybox/` holds six generated faces, each [`SIZE`] x [`SIZE`] texels, given by [`texel`]: a base
+//! colour per face scaled by a brightness that falls with the row (by 2 a row) and the column (by 1 a
+//! column), so that a face, a flip of either axis and a swap of the axes all give other colours. The
+//! first test regenerates every face from the formula and asserts the shipped PNGs equal it pixel for
+//! pixel; `WHITTED_WRITE_SKYBOX=1 cargo test --release --test render env::shipped_faces` writes them
+//! first (how they were made).
+//!
+//! The lookups follow the OpenGL 4.6 specification, section 8.13 "Cube Map Texture Selection", table
+//! 8.19: the major axis of the direction r picks the face and (sc, tc, ma):
+//!
+//! | major axis | face                | sc  | tc  | ma  |
+//! |------------|---------------------|-----|-----|-----|
+//! | +rx        | right (0)           | −rz | −ry | rx  |
+//! | −rx        | left (1)            | +rz | −ry | rx  |
+//! | +ry        | top (2)             | +rx | +rz | ry  |
+//! | −ry        | bottom (3)          | +rx | −rz | ry  |
+//! | +rz        | front (4)           | +rx | −ry | rz  |
+//! | −rz        | back (5)            | −rx | −ry | rz  |
+//!
+//! s = (sc/|ma| + 1)/2, t = (tc/|ma| + 1)/2; nearest texel (section 8.14.2): column ⌊s·w⌋, row ⌊t·h⌋,
+//! rows counted from the first row of the image file (its top). Colours are the 8-bit values taken as
+//! linear (value / 255, no gamma: `docs/scene-format.md`), so an 8-bit render of a miss is the texel's
+//! bytes. The face size is odd, so the centre of a face is the centre of texel (31, 31), not a corner
+//! shared by four texels.
+
+use std::path::{Path, PathBuf};
+
+use whitted::accel::{Accel, AccelKind, Prims};
+use whitted::render::{Options, Renderer};
+
+use crate::common;
+
+/// Texels along each side of a face.
+const SIZE: u32 = 63;
+
+/// The face files, in the order of the table above (+x, −x, +y, −y, +z, −z).
+const FACES: [&str; 6] = ["right", "left", "top", "bottom", "front", "back"];
+
+/// Each face's base colour (its texel at row 0, column 0): red, green, sky blue, brown, yellow, violet.
+const BASE: [[u32; 3]; 6] = [
+    [255, 80, 80],
+    [80, 255, 80],
+    [120, 180, 255],
+    [170, 120, 70],
+    [255, 220, 60],
+    [200, 80, 255],
+];
+
+/// The texel of `face` at `col`, `row` (from the top-left): the base colour times k/255, k = 255 − 2·row −
+/// col (255 at the top-left corner, 69 at the bottom-right), rounded down.
+fn texel(face: usize, col: u32, row: u32) -> [u8; 3] {
+    assert!(col < SIZE && row < SIZE);
+    let k = 255 - 2 * row - col;
+    BASE[face].map(|c| (c * k / 255) as u8)
+}
+
+/// The face as an image, from the formula.
+fn face_image(face: usize) -> image::RgbImage {
+    image::RgbImage::from_fn(SIZE, SIZE, |x, y| image::Rgb(texel(face, x, y)))
+}
+
+fn skybox_dir() -> PathBuf {
+    common::root().join("scenes/skybox")
+}
+
+/// Writes the six faces from the formula (`WHITTED_WRITE_SKYBOX=1`): 8-bit RGB PNG, best compression.
+fn write_faces(dir: &Path) {
+    use image::ImageEncoder;
+    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+    std::fs::create_dir_all(dir).unwrap();
+    for (face, name) in FACES.iter().enumerate() {
+        let file = std::fs::File::create(dir.join(format!("{name}.png"))).unwrap();
+        PngEncoder::new_with_quality(file, CompressionType::Best, FilterType::Adaptive)
+            .write_image(
+                face_image(face).as_raw(),
+                SIZE,
+                SIZE,
+                image::ExtendedColorType::Rgb8,
+            )
+            .unwrap();
+    }
+}
+
+#[test]
+fn shipped_faces_are_the_formula() {
+    let dir = skybox_dir();
+    if std::env::var_os("WHITTED_WRITE_SKYBOX").is_some() {
+        write_faces(&dir);
+    }
+    // Exactly the six PNGs: a .jpg beside one would be read instead (env.rs prefers .jpg).
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    let mut want: Vec<String> = FACES.iter().map(|f| format!("{f}.png")).collect();
+    want.sort();
+    assert_eq!(names, want, "scenes/skybox holds other files than the six faces");
+    for (face, name) in FACES.iter().enumerate() {
+        let path = dir.join(format!("{name}.png"));
+        let reader = image::ImageReader::open(&path)
+            .unwrap()
+            .with_guessed_format()
+            .unwrap();
+        assert_eq!(reader.format(), Some(image::ImageFormat::Png), "{name}");
+        let image::DynamicImage::ImageRgb8(img) = reader.decode().unwrap() else {
+            panic!("{name}.png is not 8-bit RGB");
+        };
+        assert_eq!(img.dimensions(), (SIZE, SIZE), "{name}");
+        for (x, y, p) in img.enumerate_pixels() {
+            assert_eq!(p.0, texel(face, x, y), "{name}.png at column {x}, row {y}");
+        }
+    }
+    // A texel tells its face: no colour appears on two faces.
+    let mut seen = std::collections::HashMap::new();
+    for (face, name) in FACES.iter().enumerate() {
+        for row in 0..SIZE {
+            for col in 0..SIZE {
+                let other = *seen.entry(texel(face, col, row)).or_insert(face);
+                assert_eq!(other, face, "a colour of {name} is also on {}", FACES[other]);
+            }
+        }
+    }
+}
+
+/// A copy of the shipped faces in a fresh folder, as `sky/`, with the scene files written there.
+fn sky_folder() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("sky")).unwrap();
+    for name in FACES {
+        let file = format!("{name}.png");
+        std::fs::copy(skybox_dir().join(&file), dir.path().join("sky").join(&file)).unwrap();
+    }
+    dir
+}
+
+/// A scene with nothing in it, looking from the origin toward `at` with `up`, 3 x 3 pixels, a magenta
+/// background and the skybox `sky`.
+fn empty_scene(dir: &Path, at: [f64; 3], up: [f64; 3]) -> PathBuf {
+    let path = dir.join("scene.p3f");
+    let text = format!(
+        "spp 0\nbclr 1 0 1\nenv sky\nv\nfrom 0 0 0\nat {} {} {}\nup {} {} {}\nangle 30\nhither 0.01\n\
+         resolution 3 3\n",
+        at[0], at[1], at[2], up[0], up[1], up[2]
+    );
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// The 8-bit colour and the linear colour of the centre pixel, which looks exactly toward `at`.
+fn centre_pixel(dir: &Path, at: [f64; 3], up: [f64; 3]) -> ([u8; 3], glam::Vec3) {
+    let scene = whitted::scene::load(&empty_scene(dir, at, up)).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let accel = Accel::build(Prims::new(&scene), AccelKind::None);
+    let renderer = Renderer::new(&scene, &accel, Options::new(&scene));
+    assert!(renderer.warnings.is_empty(), "{:?}", renderer.warnings);
+    assert_eq!(renderer.size(), (3, 3));
+    let bytes = renderer.render().to_rgb8(false);
+    let i = (3 + 1) * 3;
+    ([bytes[i], bytes[i + 1], bytes[i + 2]], renderer.pixel(1, 1))
+}
+
+#[track_caller]
+fn assert_sees(dir: &Path, at: [f64; 3], up: [f64; 3], face: usize, col: u32, row: u32) {
+    let want = texel(face, col, row);
+    let (bytes, linear) = centre_pixel(dir, at, up);
+    assert_eq!(
+        bytes, want,
+        "looking toward {at:?}: want {} texel (column {col}, row {row})",
+        FACES[face]
+    );
+    for c in 0..3 {
+        let v = f32::from(want[c]) / 255.0;
+        assert!(
+            (linear[c] - v).abs() <= 1e-6,
+            "toward {at:?}: linear {linear:?}, want {want:?} / 255 (no gamma)"
+        );
+    }
+}
+
+/// Along each axis the camera sees the centre texel (31, 31) of that axis' face (s = t = 1/2, ⌊31.5⌋ =
+/// 31). `up` is +y for the horizontal views; looking up it is −z, looking down +z.
+#[test]
+fn the_six_axes_see_the_centres_of_their_faces() {
+    let dir = sky_folder();
+    let views: [([f64; 3], [f64; 3]); 6] = [
+        ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]),
+        ([0.0, 1.0, 0.0], [0.0, 0.0, -1.0]),
+        ([0.0, -1.0, 0.0], [0.0, 0.0, 1.0]),
+        ([0.0, 0.0, 1.0], [0.0, 1.0, 0.0]),
+        ([0.0, 0.0, -1.0], [0.0, 1.0, 0.0]),
+    ];
+    for (face, (at, up)) in views.into_iter().enumerate() {
+        assert_sees(dir.path(), at, up, face, 31, 31);
+    }
+}
+
+/// One direction off the centre of each face, its texel worked out by hand from table 8.19 (above):
+/// s·63 and t·63 fall a quarter of a texel or more inside their texel, so rounding cannot move them. A
+/// face read mirrored, upside down or transposed gives another colour at each (k differs).
+#[test]
+fn off_centre_directions_see_the_texels_of_the_opengl_table() {
+    let dir = sky_folder();
+    let y = [0.0, 1.0, 0.0];
+    // (direction, up, face, column, row)
+    type Case = ([f64; 3], [f64; 3], usize, u32, u32);
+    let cases: [Case; 6] = [
+        // +x major: sc = −rz = 0.25, tc = −ry = −0.5; s = 0.625, t = 0.25; 39.375, 15.75.
+        ([1.0, 0.5, -0.25], y, 0, 39, 15),
+        // −x major: sc = +rz = −0.25, tc = −ry = −0.5; s = 0.375, t = 0.25; 23.625, 15.75.
+        ([-1.0, 0.5, -0.25], y, 1, 23, 15),
+        // +y major: sc = +rx = 0.5, tc = +rz = −0.25; s = 0.75, t = 0.375; 47.25, 23.625.
+        ([0.5, 1.0, -0.25], [0.0, 0.0, -1.0], 2, 47, 23),
+        // −y major: sc = +rx = 0.5, tc = −rz = 0.25; s = 0.75, t = 0.625; 47.25, 39.375.
+        ([0.5, -1.0, -0.25], [0.0, 0.0, 1.0], 3, 47, 39),
+        // +z major: sc = +rx = 0.5, tc = −ry = 0.25; s = 0.75, t = 0.625; 47.25, 39.375.
+        ([0.5, -0.25, 1.0], y, 4, 47, 39),
+        // −z major: sc = −rx = −0.5, tc = −ry = 0.25; s = 0.25, t = 0.625; 15.75, 39.375.
+        ([0.5, -0.25, -1.0], y, 5, 15, 39),
+    ];
+    for (at, up, face, col, row) in cases {
+        // The check can tell the texel from its mirror images and its transpose on the same face.
+        let k = |c: u32, r: u32| texel(face, c, r);
+        let m = SIZE - 1;
+        for (c, r) in [(m - col, row), (col, m - row), (row, col)] {
+            assert_ne!(k(c, r), k(col, row), "{at:?}: ({c}, {r})");
+        }
+        assert_sees(dir.path(), at, up, face, col, row);
+    }
+}
+
+/// `env missing_dir`: the binary warns (one line, on stderr) and renders the background colour.
+#[test]
+fn a_missing_skybox_warns_and_renders_the_background_colour() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.p3f");
+    std::fs::write(
+        &scene,
+        "spp 0\nbclr 0.2 0.4 0.6\nenv missing_dir\nv\nfrom 0 0 0\nat 1 0.5 0.25\nup 0 1 0\nangle 60\n\
+         hither 0.01\nresolution 8 6\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out.png");
+    let run = common::whitted(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let err = String::from_utf8(run.stderr).unwrap();
+    assert!(run.status.success(), "{err}");
+    assert_eq!(
+        err,
+        format!(
+            "whitted: warning: {}:3:5: environment map directory \"{}\" not found; using the background \
+             colour\n",
+            scene.display(),
+            dir.path().join("missing_dir").display()
+        )
+    );
+    let img = common::rgb(&out);
+    assert_eq!(img.dimensions(), (8, 6));
+    // 0.2, 0.4, 0.6 times 255, rounded.
+    assert!(img.pixels().all(|p| p.0 == [51, 102, 153]), "{img:?}");
+}
+
+/// A course scene finds `scenes/skybox`: no warning about it, and where it shows its background (the pixels that
+/// are exactly `bclr` when the skybox is taken away) the binary's render shows texels of the faces.
+#[test]
+fn a_course_scene_renders_its_sky() {
+    let path = common::root().join("scenes/balls_low.p3f");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("balls_low.png");
+    let run = common::whitted(&[
+        "render",
+        "scenes/balls_low.p3f",
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "--quiet",
+    ]);
+    let err = String::from_utf8(run.stderr).unwrap();
+    assert!(run.status.success(), "{err}");
+    // Its one warning is about its lens (aperture 1 at spp 0), none about the skybox.
+    assert!(
+        !err.contains("environment map") && !err.contains("skybox"),
+        "{err}"
+    );
+    let sky = common::rgb(&out);
+    assert_eq!(sky.dimensions(), (64, 64));
+
+    // The same frame without the skybox (spp 0 in the file: one ray a pixel, so a miss is exactly bclr).
+    let mut scene = whitted::scene::load(&path).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(scene.env.as_deref(), Some(skybox_dir().as_path()));
+    scene.env = None;
+    let accel = Accel::build(Prims::new(&scene), AccelKind::None);
+    let options = Options {
+        width: 64,
+        height: 64,
+        ..Options::new(&scene)
+    };
+    assert_eq!(options.spp, 0);
+    let flat = Renderer::new(&scene, &accel, options).render().to_rgb8(false);
+    // bclr 0.078 0.361 0.753, times 255, rounded.
+    let bclr = [20, 92, 192];
+    let texels: std::collections::HashSet<[u8; 3]> = (0..6)
+        .flat_map(|f| (0..SIZE).flat_map(move |r| (0..SIZE).map(move |c| texel(f, c, r))))
+        .collect();
+    let mut background = 0;
+    for (i, p) in sky.pixels().enumerate() {
+        if flat[3 * i..3 * i + 3] == bclr {
+            background += 1;
+            assert_ne!(p.0, bclr, "pixel {i} shows bclr");
+            assert!(
+                texels.contains(&p.0),
+                "pixel {i}: {:?} is no texel of the skybox",
+                p.0
+            );
+        }
+    }
+    assert!(background > 64 * 64 / 10, "only {background} background pixels");
+}

@@ -1,0 +1,558 @@
+//! `whitted view`: a clear error without a display; under Xvfb (when `xvfb-run` is installed) a real
+//! window whose scripted frames give `render --passes`'s image, whose options (`--height`, `--accel`,
+//! `--kernel`, `--max-depth`, `--srgb`) reach the frame, its title and its screenshot, and whose keys
+//! (F12, Ctrl-S, Escape, pressed through the X server's XTEST extension) save and quit.
+#![cfg(feature = "view")]
+
+#[path = "../common/mod.rs"]
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use common::{failure, ok};
+
+const BIN: &str = env!("CARGO_BIN_EXE_whitted");
+
+/// One Xvfb at a time: `xvfb-run -a` picks the first free display number, and two started at once can
+/// pick the same one.
+static XVFB: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// Holds [`XVFB`] for a test (a test that failed holding it leaves it usable).
+fn one_xvfb() -> std::sync::MutexGuard<'static, ()> {
+    XVFB.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// `whitted ARGS` with no display server named in the environment.
+fn headless(args: &[&str]) -> Output {
+    Command::new(BIN)
+        .args(args)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("WAYLAND_SOCKET")
+        .output()
+        .expect("the binary runs")
+}
+
+#[test]
+fn without_a_display_view_fails_with_one_clear_line() {
+    let last = failure(&headless(&["view", "scenes/balls_low.p3f"]));
+    assert!(last.contains("cannot open a window: no display"), "{last}");
+    // The built-in scene too.
+    let last = failure(&headless(&["view"]));
+    assert!(last.contains("no display"), "{last}");
+}
+
+#[test]
+fn a_missing_scene_is_reported_before_the_display() {
+    let last = failure(&headless(&["view", "no/such/scene.p3f"]));
+    assert!(last.contains("no/such/scene.p3f"), "{last}");
+}
+
+#[test]
+fn a_display_that_does_not_answer_is_an_error_not_a_panic() {
+    let out = Command::new(BIN)
+        .args(["view", "scenes/balls_low.p3f"])
+        .env("DISPLAY", ":8731")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("WAYLAND_SOCKET")
+        .output()
+        .expect("the binary runs");
+    let last = failure(&out);
+    assert!(last.contains("cannot open a window (DISPLAY=:8731)"), "{last}");
+}
+
+#[test]
+fn screenshot_needs_frames() {
+    let out = headless(&["view", "--screenshot", "x.png"]);
+    assert_eq!(out.status.code(), Some(2), "a usage error");
+}
+
+#[test]
+fn under_xvfb_the_scripted_frames_are_render_passes() {
+    if !common::have("xvfb-run", &["--help"], "apt-get install xvfb") {
+        return;
+    }
+    let _xvfb = one_xvfb();
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("shot.png");
+    let reference = dir.path().join("reference.png");
+    let scene = "scenes/balls_low.p3f";
+    // Without Wayland's variables, so that winit takes Xvfb's display even inside a Wayland session.
+    let out = Command::new("xvfb-run")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("WAYLAND_SOCKET")
+        .args([
+            "-a",
+            BIN,
+            "view",
+            scene,
+            "--width",
+            "96",
+            "--threads",
+            "2",
+            "--frames",
+            "3",
+        ])
+        .arg("--screenshot")
+        .arg(&shot)
+        .output()
+        .expect("xvfb-run runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = Command::new(BIN)
+        .args(["render", scene, "--width", "96", "--passes", "3", "-q", "-o"])
+        .arg(&reference)
+        .output()
+        .expect("the binary runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (shot, reference) = (read(&shot), read(&reference));
+    assert_eq!(shot.dimensions(), (96, 96));
+    // A still camera's frames are the passes of a progressive render: the same image, bit for bit.
+    assert!(
+        shot == reference,
+        "the viewer's third frame differs from render --passes 3"
+    );
+}
+
+fn read(path: &Path) -> image::RgbImage {
+    image::open(path).unwrap().to_rgb8()
+}
+
+/// Out-of-range or unknown values are usage errors (exit status 2) named by clap, before any window.
+#[test]
+fn bad_option_values_are_usage_errors() {
+    for (args, first_line) in [
+        (
+            &["--max-depth", "33"][..],
+            "error: invalid value '33' for '--max-depth <MAX_DEPTH>': 33 is not in 0..=32",
+        ),
+        (
+            &["--accel", "kd"],
+            "error: invalid value 'kd' for '--accel <ACCEL>': unknown accelerator \"kd\": expected none, \
+             grid, bvh2, bvh4, bvh8 or auto",
+        ),
+        (
+            &["--kernel", "simd"],
+            "error: invalid value 'simd' for '--kernel <KERNEL>': unknown kernel \"simd\": expected \
+             single, packet or stream",
+        ),
+        (
+            &["--threads", "0"],
+            "error: invalid value '0' for '--threads <THREADS>': 0 is not in 1..=1024",
+        ),
+        (
+            &["--frames", "0"],
+            "error: invalid value '0' for '--frames <FRAMES>': 0 is not in 1..=4294967295",
+        ),
+    ] {
+        let out = headless(&[&["view", "scenes/balls_low.p3f"][..], args].concat());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.lines().next(), Some(first_line), "{args:?}");
+    }
+}
+
+/// `whitted ARGS` under `xvfb-run`, which must succeed.
+fn under_xvfb(args: &[&str]) {
+    let out = Command::new("xvfb-run")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("WAYLAND_SOCKET")
+        .arg("-a")
+        .arg(BIN)
+        .args(args)
+        .current_dir(common::root())
+        .output()
+        .expect("xvfb-run runs");
+    assert!(
+        out.status.success(),
+        "view {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// The viewer's options reach its frames: each screenshot after 2 frames is `render --passes 2`'s image
+/// with the same options (--height alone keeps the file's aspect ratio; --max-depth 1 and --srgb change
+/// the image; --accel and --kernel keep it).
+#[test]
+fn under_xvfb_the_options_reach_the_screenshot() {
+    if !common::have("xvfb-run", &["--help"], "apt-get install xvfb") {
+        return;
+    }
+    let _xvfb = one_xvfb();
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let at = |name: &str| d.join(name).to_str().unwrap().to_string();
+    let balls = ["scenes/balls_low.p3f", "--width", "48", "--height", "32"];
+    let mut shots = Vec::new();
+    for (name, options) in [
+        ("plain", &balls[..]),
+        // The built-in scene, scenes/default.p3f: 640x480.
+        ("height", &["--height", "30"]),
+        ("depth", &[&balls[..], &["--max-depth", "1"]].concat()),
+        ("srgb", &[&balls[..], &["--srgb"]].concat()),
+        (
+            "structures",
+            &[&balls[..], &["--accel", "grid", "--kernel", "single"]].concat(),
+        ),
+    ] {
+        let shot = at(&format!("{name}-view.png"));
+        let reference = at(&format!("{name}-render.png"));
+        let common = [&["--threads", "2"][..], options].concat();
+        under_xvfb(&[&["view"][..], &common, &["--frames", "2", "--screenshot", &shot]].concat());
+        // render takes --accel and --kernel too: the same words, the same image.
+        ok(&[
+            &["render", "-q"][..],
+            &common,
+            &["--passes", "2", "-o", &reference],
+        ]
+        .concat());
+        let (shot, reference) = (read(Path::new(&shot)), read(Path::new(&reference)));
+        assert!(
+            shot == reference,
+            "{name}: the screenshot is not render --passes 2's image"
+        );
+        shots.push((name, shot));
+    }
+    let image = |name: &str| &shots.iter().find(|(n, _)| *n == name).unwrap().1;
+    // The default scene is 640x480: --height 30 alone is 40 wide.
+    assert_eq!(image("height").dimensions(), (40, 30));
+    assert_eq!(image("plain").dimensions(), (48, 32));
+    assert!(image("depth") != image("plain"), "--max-depth 1 changes nothing");
+    assert!(image("srgb") != image("plain"), "--srgb changes nothing");
+    assert!(
+        image("structures") == image("plain"),
+        "--accel or --kernel change the image"
+    );
+}
+
+/// Under Xvfb, the viewer's keys through XTEST: the title shows the options given (accelerator,
+/// kernel, size, depth); F12 and then Ctrl-S save the frame on screen as `balls_low-view-1.png` and
+/// `-2.png` in the current directory, each with the `whitted render` command that renders the same
+/// image (run here: the same pixels), Ctrl-S without moving the camera back as S alone would; Escape
+/// quits with status 0.
+#[cfg(target_os = "linux")]
+#[test]
+fn under_xvfb_f12_and_ctrl_s_save_what_render_renders_and_escape_quits() {
+    if !common::have("xvfb-run", &["--help"], "apt-get install xvfb") {
+        return;
+    }
+    let _xvfb = one_xvfb();
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::root().join("scenes/balls_low.p3f");
+    let mut viewer = keys::Viewer::start(
+        dir.path(),
+        &[
+            scene.to_str().unwrap(),
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--threads",
+            "2",
+            "--accel",
+            "grid",
+            "--kernel",
+            "single",
+            "--max-depth",
+            "2",
+            "--srgb",
+        ],
+    );
+    let title = viewer.title_once(|t| t.contains(" | pass "));
+    for part in ["| grid, single |", "| 48x32 (full) |", ", depth 2"] {
+        assert!(title.contains(part), "{part}: {title}");
+    }
+    assert!(title.starts_with("whitted: balls_low.p3f | "), "{title}");
+
+    viewer.press(&[keys::F12]);
+    let first = viewer.saved("balls_low-view-1.png");
+    viewer.press(&[keys::CONTROL_L, keys::S]);
+    let second = viewer.saved("balls_low-view-2.png");
+    viewer.press(&[keys::ESCAPE]);
+    let status = viewer.wait();
+    assert_eq!(status.code(), Some(0), "Escape quits: {}", viewer.stderr());
+
+    // Ctrl-S saved the same view: S's move back did not happen.
+    let from = |command: &str| {
+        let words: Vec<&str> = command.split_whitespace().collect();
+        let i = words.iter().position(|w| *w == "--from").unwrap();
+        words[i + 1].to_string()
+    };
+    assert_eq!(from(&first.command), from(&second.command));
+    for (k, saved) in [first, second].into_iter().enumerate() {
+        let file = dir.path().join(&saved.file);
+        let shot = read(&file);
+        assert_eq!(shot.dimensions(), (48, 32));
+        let command = saved.command.strip_prefix("whitted render ").unwrap();
+        for word in ["--max-depth 2", "--srgb", "--width 48 --height 32"] {
+            assert!(command.contains(word), "{word}: {command}");
+        }
+        let reference = dir.path().join(format!("reference-{k}.png"));
+        let mut words: Vec<&str> = command.split_whitespace().collect();
+        words.extend(["-q", "-o", reference.to_str().unwrap()]);
+        let out = Command::new(BIN)
+            .arg("render")
+            .args(&words)
+            .output()
+            .expect("the binary runs");
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            read(&reference) == shot,
+            "{}: not the image of its command: whitted render {command}",
+            saved.file
+        );
+    }
+}
+
+/// Driving the viewer's window under Xvfb: its display read from the shell xvfb-run starts, its window
+/// found by title, its keys pressed through XTEST, its stderr read line by line.
+#[cfg(target_os = "linux")]
+mod keys {
+    use std::io::{BufRead, BufReader};
+    use std::path::Path;
+    use std::process::{Child, Command, ExitStatus, Stdio};
+    use std::sync::mpsc::{Receiver, channel};
+    use std::time::Duration;
+
+    use x11rb::connection::{Connection, RequestConnection};
+    use x11rb::protocol::xproto::{
+        AtomEnum, ConnectionExt as _, InputFocus, KEY_PRESS_EVENT, KEY_RELEASE_EVENT, MapState, Window,
+    };
+    use x11rb::protocol::xtest::ConnectionExt as _;
+    use x11rb::rust_connection::RustConnection;
+
+    /// Keysyms (X11's keysymdef.h).
+    pub const F12: u32 = 0xffc9;
+    pub const CONTROL_L: u32 = 0xffe3;
+    pub const S: u32 = 0x0073;
+    pub const ESCAPE: u32 = 0xff1b;
+
+    /// How long anything may take: a window opening, a frame, a save.
+    const PATIENCE: Duration = Duration::from_secs(60);
+
+    /// A saved image: its file name and the `whitted render` command printed with it.
+    pub struct Saved {
+        pub file: String,
+        pub command: String,
+    }
+
+    pub struct Viewer {
+        /// xvfb-run.
+        child: Child,
+        /// The viewer's process.
+        pid: i32,
+        lines: Receiver<String>,
+        seen: Vec<String>,
+        conn: RustConnection,
+        root: Window,
+        window: Window,
+    }
+
+    /// Polls of [`until`] before it gives up on a viewer that never gets there (a hang guard, not a
+    /// measure of speed: a slow machine only polls more).
+    const POLLS: u32 = 3000;
+
+    fn until<T>(what: &str, mut f: impl FnMut() -> Option<T>) -> T {
+        for _ in 0..POLLS {
+            if let Some(v) = f() {
+                return v;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        panic!("gave up waiting for {what} after {POLLS} polls");
+    }
+
+    impl Viewer {
+        /// `whitted view ARGS` in `dir` under a new Xvfb that takes any client (`-ac`), and its window.
+        pub fn start(dir: &Path, args: &[&str]) -> Viewer {
+            let display_file = dir.join("display");
+            let mut child = Command::new("xvfb-run")
+                .env_remove("WAYLAND_DISPLAY")
+                .env_remove("WAYLAND_SOCKET")
+                .args(["-a", "-s", "-ac -screen 0 640x480x24", "sh", "-c"])
+                .arg(
+                    "echo $$ > pid && echo \"$DISPLAY\" > display.tmp && mv display.tmp display && \
+                     exec \"$0\" view \"$@\"",
+                )
+                .arg(super::BIN)
+                .args(args)
+                .current_dir(dir)
+                .stdout(Stdio::null())
+                .stderr(Stdio::piped())
+                .spawn()
+                .expect("xvfb-run runs");
+            let stderr = child.stderr.take().unwrap();
+            let (send, lines) = channel();
+            std::thread::spawn(move || {
+                for line in BufReader::new(stderr).lines() {
+                    let Ok(line) = line else { break };
+                    if send.send(line).is_err() {
+                        break;
+                    }
+                }
+            });
+            let display = until("xvfb-run's display", || {
+                let d = std::fs::read_to_string(&display_file).ok()?;
+                Some(d.trim().to_string())
+            });
+            // The shell's process becomes the viewer's (exec).
+            let pid = std::fs::read_to_string(dir.join("pid")).unwrap();
+            let pid = pid.trim().parse().unwrap();
+            let (conn, screen) = until("a connection to the X server", || {
+                x11rb::connect(Some(&display)).ok()
+            });
+            let root = conn.setup().roots[screen].root;
+            let xtest = conn
+                .extension_information(x11rb::protocol::xtest::X11_EXTENSION_NAME)
+                .unwrap();
+            assert!(xtest.is_some(), "Xvfb without XTEST");
+            let mut viewer = Viewer {
+                child,
+                pid,
+                lines,
+                seen: Vec::new(),
+                conn,
+                root,
+                window: 0,
+            };
+            viewer.window = until("the viewer's window", || viewer.find_window());
+            viewer
+                .conn
+                .set_input_focus(InputFocus::POINTER_ROOT, viewer.window, x11rb::CURRENT_TIME)
+                .unwrap();
+            viewer.conn.get_input_focus().unwrap().reply().unwrap();
+            viewer
+        }
+
+        /// The mapped top-level window titled `whitted: ...`.
+        fn find_window(&self) -> Option<Window> {
+            let children = self.conn.query_tree(self.root).ok()?.reply().ok()?.children;
+            children.into_iter().find(|&w| {
+                let mapped = self
+                    .conn
+                    .get_window_attributes(w)
+                    .ok()
+                    .and_then(|c| c.reply().ok())
+                    .is_some_and(|a| a.map_state == MapState::VIEWABLE);
+                mapped && self.title(w).is_some_and(|t| t.starts_with("whitted: "))
+            })
+        }
+
+        /// A window's title: `_NET_WM_NAME` (UTF-8), else `WM_NAME`.
+        fn title(&self, window: Window) -> Option<String> {
+            let net = self
+                .conn
+                .intern_atom(false, b"_NET_WM_NAME")
+                .ok()?
+                .reply()
+                .ok()?
+                .atom;
+            for atom in [net, AtomEnum::WM_NAME.into()] {
+                let value = self
+                    .conn
+                    .get_property(false, window, atom, AtomEnum::ANY, 0, 1024)
+                    .ok()?
+                    .reply()
+                    .ok()?
+                    .value;
+                if !value.is_empty() {
+                    return String::from_utf8(value).ok();
+                }
+            }
+            None
+        }
+
+        /// The first title of the window that `want` accepts.
+        pub fn title_once(&self, want: impl Fn(&str) -> bool) -> String {
+            until("the title", || self.title(self.window).filter(|t| want(t)))
+        }
+
+        /// The keycode of `keysym` in the server's keymap.
+        fn keycode(&self, keysym: u32) -> u8 {
+            let setup = self.conn.setup();
+            let (min, max) = (setup.min_keycode, setup.max_keycode);
+            let map = self
+                .conn
+                .get_keyboard_mapping(min, max - min + 1)
+                .unwrap()
+                .reply()
+                .unwrap();
+            let per = map.keysyms_per_keycode as usize;
+            let index = map
+                .keysyms
+                .chunks(per)
+                .position(|syms| syms.first() == Some(&keysym))
+                .unwrap_or_else(|| panic!("no key for keysym {keysym:#x}"));
+            min + index as u8
+        }
+
+        /// Presses `keysyms` in order, then releases them in the reverse order.
+        pub fn press(&mut self, keysyms: &[u32]) {
+            let codes: Vec<u8> = keysyms.iter().map(|&k| self.keycode(k)).collect();
+            let fake = |kind: u8, code: u8| {
+                self.conn
+                    .xtest_fake_input(kind, code, x11rb::CURRENT_TIME, self.root, 0, 0, 0)
+                    .unwrap();
+            };
+            for &code in &codes {
+                fake(KEY_PRESS_EVENT, code);
+            }
+            for &code in codes.iter().rev() {
+                fake(KEY_RELEASE_EVENT, code);
+            }
+            self.conn.get_input_focus().unwrap().reply().unwrap();
+        }
+
+        /// The next stderr line.
+        fn line(&mut self, what: &str) -> String {
+            let line = self.lines.recv_timeout(PATIENCE).unwrap_or_else(|_| {
+                panic!(
+                    "timed out waiting for {what}; stderr so far:\n{}",
+                    self.seen.join("\n")
+                )
+            });
+            self.seen.push(line.clone());
+            line
+        }
+
+        /// Waits for `whitted: saved FILE (...)` and the `whitted render` command printed after it.
+        pub fn saved(&mut self, file: &str) -> Saved {
+            let prefix = format!("whitted: saved {file} (48x32, ");
+            while !self.line(&prefix).starts_with(&prefix) {}
+            loop {
+                let line = self.line("the render command");
+                if line.starts_with("whitted render ") {
+                    return Saved {
+                        file: file.to_string(),
+                        command: line,
+                    };
+                }
+            }
+        }
+
+        /// The exit status, once the viewer (and xvfb-run) ended.
+        pub fn wait(&mut self) -> ExitStatus {
+            until("the viewer to quit", || self.child.try_wait().unwrap())
+        }
+
+        /// What stderr said so far, and what is left.
+        pub fn stderr(&mut self) -> String {
+            while let Ok(line) = self.lines.recv_timeout(Duration::from_millis(100)) {
+                self.seen.push(line);
+            }
+            self.seen.join("\n")
+        }
+    }
+
+    impl Drop for Viewer {
+        /// A test that failed leaves nothing running: the viewer is killed, and xvfb-run, whose command
+        /// it was, then takes its server down and exits.
+        fn drop(&mut self) {
+            if let Ok(None) = self.child.try_wait() {
+                // SAFETY: kill(2) on the viewer's process id, which this test started.
+                unsafe { libc::kill(self.pid, libc::SIGKILL) };
+                let _ = self.child.wait();
+            }
+        }
+    }
+}
