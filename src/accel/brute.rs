@@ -39,7 +39,7 @@ impl<'a> Structure<'a> for Brute<'a> {
         "brute force: every primitive for every ray".to_string()
     }
 
-    #[inline]
+    #[inline(always)]
     fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
         Brute::traverse::<P>(self, ray, t_min, hit)
     }

@@ -423,7 +423,7 @@ impl<'a> Structure<'a> for Grid<'a> {
         self.stats().to_string()
     }
 
-    #[inline]
+    #[inline(always)]
     fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
         Grid::traverse::<P>(self, ray, t_min, hit)
     }

@@ -217,7 +217,7 @@ impl<'a> Structure<'a> for Bvh2<'a> {
         format!("bvh2: {}", self.stats())
     }
 
-    #[inline]
+    #[inline(always)]
     fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
         Bvh2::traverse::<P>(self, ray, t_min, hit)
     }

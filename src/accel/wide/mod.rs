@@ -249,12 +249,12 @@ macro_rules! wide_structure {
                 true
             }
 
-            #[inline]
+            #[inline(always)]
             fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
                 $bvh::traverse::<P>(self, ray, t_min, hit)
             }
 
-            #[inline]
+            #[inline(always)]
             fn traverse_packet<P: HitPolicy>(
                 &self,
                 rays: &RayPacket,
@@ -265,6 +265,7 @@ macro_rules! wide_structure {
                 $bvh::traverse_packet::<P>(self, rays, active, t_min, hits)
             }
 
+            #[inline(always)]
             fn traverse_stream<P: HitPolicy>(
                 &self,
                 rays: &[Ray],

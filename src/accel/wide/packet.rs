@@ -162,29 +162,47 @@ impl<P: HitPolicy, const W: usize> OnLanes8 for Packet<'_, '_, P, W> {
                 let t_max = t_hit.mul(margin);
                 let start = stack.len();
                 let t_max2 = Twice(t_max, t_max);
-                // Two children a step (see `Twice`; faster than one: `profiles/README.md`).
-                for c in (0..W).step_by(2) {
-                    // The collapse fills a node's slots first to last: the first empty one ends them
-                    // (an empty second slot of a pair has an inverted box, which no ray enters).
-                    if node.child[c] == EMPTY {
-                        break;
-                    }
-                    let plane = |axis: usize, max: bool| {
-                        let a = if max { &node.max[axis] } else { &node.min[axis] };
-                        Twice(L::splat(a[c]), L::splat(a[c + 1]))
-                    };
-                    let (Twice(entry0, entry1), entered) = slab(&p2, plane, lo2, t_max2);
-                    for (k, entry, entered) in [(c, entry0, entered & 0xff), (c + 1, entry1, entered >> 8)] {
-                        let entered = entered & mask;
-                        if entered != 0 {
-                            bvh.prefetch(node.child[k]);
-                            stack.push(Entry {
-                                node: node.child[k],
-                                mask: entered as u8,
-                                key: entry.to_array()[entered.trailing_zeros() as usize],
-                                entry,
-                            });
+                // Two children a step (see `Twice`; faster than one: `profiles/README.md`), the pairs
+                // written out (`W` is 4 or 8), which compiles to fewer instructions a node than a loop.
+                // The collapse fills a node's slots first to last: the first empty one ends them (an
+                // empty second slot of a pair has an inverted box, which no ray enters).
+                macro_rules! pair {
+                    ($pairs:lifetime, $c:expr) => {{
+                        let c = $c;
+                        if node.child[c] == EMPTY {
+                            break $pairs;
                         }
+                        let plane = |axis: usize, max: bool| {
+                            let a = if max {
+                                &node.max[axis]
+                            } else {
+                                &node.min[axis]
+                            };
+                            Twice(L::splat(a[c]), L::splat(a[c + 1]))
+                        };
+                        let (Twice(entry0, entry1), entered) = slab(&p2, plane, lo2, t_max2);
+                        for (k, entry, entered) in
+                            [(c, entry0, entered & 0xff), (c + 1, entry1, entered >> 8)]
+                        {
+                            let entered = entered & mask;
+                            if entered != 0 {
+                                bvh.prefetch(node.child[k]);
+                                stack.push(Entry {
+                                    node: node.child[k],
+                                    mask: entered as u8,
+                                    key: entry.to_array()[entered.trailing_zeros() as usize],
+                                    entry,
+                                });
+                            }
+                        }
+                    }};
+                }
+                'pairs: {
+                    pair!('pairs, 0);
+                    pair!('pairs, 2);
+                    if W > 4 {
+                        pair!('pairs, 4);
+                        pair!('pairs, 6);
                     }
                 }
                 match stack.len() - start {
