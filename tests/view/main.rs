@@ -44,6 +44,22 @@ fn without_a_display_view_fails_with_one_clear_line() {
 }
 
 #[test]
+fn a_wayland_session_without_xwayland_is_no_display() {
+    // The viewer speaks X11 only: a Wayland socket alone is not a display it can use.
+    let out = Command::new(BIN)
+        .args(["view", "scenes/balls_low.p3f"])
+        .env_remove("DISPLAY")
+        .env("WAYLAND_DISPLAY", "wayland-0")
+        .output()
+        .expect("the binary runs");
+    let last = failure(&out);
+    assert!(
+        last.contains("no display (DISPLAY is not set; on Wayland the viewer needs XWayland)"),
+        "{last}"
+    );
+}
+
+#[test]
 fn a_missing_scene_is_reported_before_the_display() {
     let last = failure(&headless(&["view", "no/such/scene.p3f"]));
     assert!(last.contains("no/such/scene.p3f"), "{last}");
