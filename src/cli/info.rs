@@ -11,6 +11,7 @@ use whitted::accel::{Accel, AccelKind, Prims};
 use whitted::render::spd::{self, Counts};
 use whitted::scene::{self, Scene};
 
+use super::console;
 use super::frame::{BuildKind, build_options};
 use super::report::{accel_name, image_size, simd_name};
 use super::setup::warn;
@@ -64,16 +65,19 @@ pub fn run(args: &InfoArgs) -> whitted::Result<()> {
         if let Some(readme) = readme {
             out.insert("spd".into(), spd_json(&scene, readme.as_ref()));
         }
-        println!("{}", Value::Object(out));
+        console::out(format_args!("{}\n", Value::Object(out)))?;
     } else {
-        print!("{}", text(&args.scene, &scene, load_s));
+        let mut page = text(&args.scene, &scene, load_s);
         if let Some((build_s, accel)) = built {
-            println!("accelerator   {}", accel.describe());
-            println!("build time    {build_s:.3} s");
+            page += &format!(
+                "accelerator   {}\nbuild time    {build_s:.3} s\n",
+                accel.describe()
+            );
         }
         if let Some(readme) = readme {
-            print!("{}", spd_text(&scene, readme.as_ref()));
+            page += &spd_text(&scene, readme.as_ref());
         }
+        console::out(page)?;
     }
     Ok(())
 }

@@ -31,13 +31,13 @@ pub fn run(args: &MergeArgs) -> whitted::Result<()> {
     let film = parts::merge::merge(&args.parts)?;
     film.write(&args.output, args.srgb)?;
     if !args.quiet {
-        eprintln!(
+        crate::cli::console::note(format!(
             "whitted: merged {} parts into {}x{} -> {}",
             args.parts.len(),
             film.width,
             film.height,
             args.output.display()
-        );
+        ));
     }
     Ok(())
 }

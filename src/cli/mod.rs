@@ -6,6 +6,7 @@
 //! stderr (128 + SIGINT, what a shell reports for a process the signal killed).
 
 mod bench;
+mod console;
 mod frame;
 mod info;
 mod merge;
@@ -59,7 +60,7 @@ fn usage_error(e: clap::Error) -> ExitCode {
     if e.kind() == clap::error::ErrorKind::ValueValidation
         && e.to_string().contains(whitted::accel::NO_EMBREE)
     {
-        eprintln!("whitted: {}", whitted::accel::NO_EMBREE);
+        console::note(format!("whitted: {}", whitted::accel::NO_EMBREE));
         return ExitCode::from(USAGE);
     }
     e.exit()
@@ -84,7 +85,7 @@ pub fn main() -> ExitCode {
         Ok(Ended::Done) => ExitCode::SUCCESS,
         Ok(Ended::Interrupted) => ExitCode::from(INTERRUPTED),
         Err(e) => {
-            eprintln!("whitted: {e}");
+            console::note(format!("whitted: {e}"));
             ExitCode::FAILURE
         }
     }

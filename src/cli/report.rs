@@ -9,6 +9,8 @@ use whitted::accel::{Accel, Isa};
 use whitted::render::spd::{self, Counts};
 use whitted::render::{Options, RayCounts};
 
+use super::console::{note, out};
+
 /// The program's version, as `whitted --version` prints it.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 /// The Readme's tolerance: a renderer's counts should be within 10% of its table.
@@ -71,11 +73,14 @@ impl Report {
         }
     }
 
-    /// Prints the report: text on stderr, JSON on stdout.
-    pub fn print(&self, format: Format) {
+    /// Prints the report: text on stderr (dropped if stderr cannot take it), JSON on stdout.
+    pub fn print(&self, format: Format) -> whitted::Result<()> {
         match format {
-            Format::Text => eprint!("{}", self.text()),
-            Format::Json => println!("{}", Value::Object(self.json())),
+            Format::Text => {
+                note(self.text().trim_end());
+                Ok(())
+            }
+            Format::Json => out(format_args!("{}\n", Value::Object(self.json()))),
         }
     }
 

@@ -27,6 +27,6 @@ pub fn thread_pool(threads: Option<usize>) -> whitted::Result<rayon::ThreadPool>
 /// Prints `warnings` on stderr, one a line.
 pub fn warn(warnings: &[String]) {
     for w in warnings {
-        eprintln!("whitted: warning: {w}");
+        crate::cli::console::note(format!("whitted: warning: {w}"));
     }
 }

@@ -46,12 +46,21 @@ pub struct Lexer {
     peeked: Option<Tok>,
 }
 
-/// Opens a file for reading, transparently decompressing gzip (recognised by its magic bytes).
+/// Opens a file for reading, transparently decompressing gzip (recognised by its magic bytes). Only a
+/// regular file is opened: opening a FIFO would wait for a writer, and a device may never end.
 pub fn open(path: &Path) -> Result<Box<dyn Read + Send>> {
-    let file = File::open(path).map_err(|e| Error::file(path, format!("cannot open: {}", io_reason(&e))))?;
-    if file.metadata().map(|m| m.is_dir()).unwrap_or(false) {
+    let cannot = |e: std::io::Error| Error::file(path, format!("cannot open: {}", io_reason(&e)));
+    let kind = std::fs::metadata(path).map_err(cannot)?.file_type();
+    if kind.is_dir() {
         return Err(Error::file(path, "cannot open: it is a directory"));
     }
+    if !kind.is_file() {
+        return Err(Error::file(
+            path,
+            "cannot open: it is not a regular file (a FIFO, a device or a socket)",
+        ));
+    }
+    let file = File::open(path).map_err(cannot)?;
     let mut reader = BufReader::with_capacity(BUFFER_SIZE, file);
     let head = reader
         .fill_buf()

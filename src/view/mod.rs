@@ -116,7 +116,7 @@ pub(crate) fn render_loop(
     // The skybox is read once; the frames' renderers share its images.
     let (background, warning) = Background::load(scene);
     if let Some(w) = warning {
-        eprintln!("whitted: warning: {w}");
+        note(format_args!("whitted: warning: {w}"));
     }
     // Each structure is built the first time it is asked for and kept, so switching back is instant.
     let mut built: Vec<(AccelKind, Accel)> = Vec::new();
@@ -147,7 +147,10 @@ pub(crate) fn render_loop(
                 let build = |kind| Accel::try_build_with(Prims::new(scene), kind, Default::default());
                 // Only Embree can fail to build (out of memory, say): then the best of ours stands in.
                 let accel = pool.install(|| build(job.accel)).unwrap_or_else(|e| {
-                    eprintln!("whitted: {e}; {:?} renders instead", AccelKind::best());
+                    note(format_args!(
+                        "whitted: {e}; {:?} renders instead",
+                        AccelKind::best()
+                    ));
                     pool.install(|| Accel::build(Prims::new(scene), AccelKind::best()))
                 });
                 built.push((job.accel, accel));
@@ -198,6 +201,13 @@ pub(crate) fn render_loop(
 fn word(c: Vec3, srgb: bool) -> u32 {
     let [r, g, b] = [c.x, c.y, c.z].map(|v| u32::from(to_u8(v, srgb)));
     (r << 16) | (g << 8) | b
+}
+
+/// Writes `text` and a newline to standard error, or drops it where standard error cannot take it:
+/// a lost note must not stop the viewer.
+fn note(text: impl std::fmt::Display) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr().lock(), "{text}");
 }
 
 #[cfg(test)]

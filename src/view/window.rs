@@ -288,18 +288,21 @@ impl App<'_> {
             .find(|p| !p.exists())
             .expect("some number is free");
         frame.film.write(&path, self.config.srgb)?;
-        eprintln!(
+        super::note(format_args!(
             "whitted: saved {} ({}x{}, {} pass{})",
             path.display(),
             frame.film.width,
             frame.film.height,
             frame.pass,
             if frame.pass == 1 { "" } else { "es" }
-        );
+        ));
         let scene = self.config.scene.as_deref();
         let file = self.state.file_camera();
         let command = reproduce::render_command(scene, &file, &frame.job, frame.pass, self.config.srgb);
-        eprintln!("{}{command}", reproduce::view_block(&frame.job.camera));
+        super::note(format_args!(
+            "{}{command}",
+            reproduce::view_block(&frame.job.camera)
+        ));
         Ok(())
     }
 

@@ -1,5 +1,6 @@
 //! The command line, run as a user runs it: refusals before any work (`cli_checks`), the reports of
-//! `info`, `bench` and `render --stats` parsed as a script reads them (`cli_report`), every documented
+//! `info`, `bench` and `render --stats` parsed as a script reads them (`cli_report`), full and closed
+//! standard streams and a FIFO for a scene (`console`), every documented
 //! option by a value it must change or keep (`options`), Ctrl-C and `--resume` (`interrupt`), and
 //! split renders merged (`scale_out`).
 
@@ -8,6 +9,7 @@ mod common;
 
 mod cli_checks;
 mod cli_report;
+mod console;
 mod interrupt;
 mod options;
 mod scale_out;

@@ -41,9 +41,8 @@ pub fn run(args: &BenchArgs) -> whitted::Result<()> {
         .map(|t| t.report(&path, &options, loaded, threads))
         .collect();
     if args.json {
-        print::json(&timed, &reports);
+        print::json(&timed, &reports)
     } else {
-        print::text(&timed, &reports);
+        print::text(&timed, &reports)
     }
-    Ok(())
 }

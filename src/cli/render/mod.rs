@@ -21,6 +21,7 @@ use progress::Progress;
 use resume::{done_already, joined, starting_point};
 use write::{check_outputs, write, write_sums};
 
+use super::console::note;
 use super::report::{Report, image_size};
 use super::setup::{load_scene, thread_pool, warn};
 
@@ -64,7 +65,9 @@ pub fn run(args: &RenderArgs) -> whitted::Result<Ended> {
     if done_already(&plan, &acc, earlier.is_some()) {
         if !plan.quiet {
             let output = plan.output.display();
-            eprintln!("whitted: {output} holds this part already; not rendered again");
+            note(format!(
+                "whitted: {output} holds this part already; not rendered again"
+            ));
         }
         return Ok(Ended::Done);
     }
@@ -83,10 +86,10 @@ pub fn run(args: &RenderArgs) -> whitted::Result<Ended> {
     }
     let (times, threads) = ([loaded, built, rendered], pool.current_num_threads());
     if !plan.quiet {
-        eprintln!("whitted: {}", summary(&plan, times, threads));
+        note(format!("whitted: {}", summary(&plan, times, threads)));
     }
     if let Some(format) = args.report.stats {
-        stats(args, &plan, &accel, &acc, times, threads).print(format);
+        stats(args, &plan, &accel, &acc, times, threads).print(format)?;
     }
     Ok(Ended::Done)
 }
@@ -140,7 +143,7 @@ fn interrupted(plan: &Plan, scene: &Scene, acc: &Progressive) -> whitted::Result
     let passes = plan.passes();
     let (done, of) = (acc.passes(), passes.end - passes.start);
     if done == 0 {
-        eprintln!("whitted: interrupted before any tile was finished; nothing written");
+        note("whitted: interrupted before any tile was finished; nothing written");
         return Ok(Ended::Interrupted);
     }
     let stop = plan.stop_file();
@@ -166,7 +169,9 @@ fn interrupted(plan: &Plan, scene: &Scene, acc: &Progressive) -> whitted::Result
     } else {
         format!(" after {done} of {of} passes: wrote their sums to {stop}")
     };
-    eprintln!("whitted: interrupted{what}; the same command with --resume renders the rest");
+    note(format!(
+        "whitted: interrupted{what}; the same command with --resume renders the rest"
+    ));
     Ok(Ended::Interrupted)
 }
 

@@ -25,7 +25,10 @@ pub fn starting_point(plan: &Plan, scene: &Scene) -> (Progressive, Option<Progre
     }
     let say = |what: String| {
         if !plan.quiet {
-            eprintln!("whitted: resuming from {}: {what}", plan.stop_file().display());
+            crate::cli::console::note(format!(
+                "whitted: resuming from {}: {what}",
+                plan.stop_file().display()
+            ));
         }
     };
     if part.tiles == tiles {
