@@ -177,6 +177,15 @@ fn dir_of(path: &Path) -> &Path {
 /// What is at `path` may be replaced: nothing, or a regular file (not a directory, a link or a device,
 /// which a rename would replace by a file).
 fn check_target(path: &Path) -> std::result::Result<(), String> {
+    // `Path` drops a trailing separator from its components: `o/q.png/` would pass as `o/q.png`
+    // and fail only at the end of the render.
+    if path
+        .as_os_str()
+        .as_encoded_bytes()
+        .ends_with(std::path::MAIN_SEPARATOR_STR.as_bytes())
+    {
+        return Err("names a directory (it ends in a path separator): expected a file name".into());
+    }
     let dir = dir_of(path);
     if !dir.is_dir() {
         return Err(format!("the directory {} does not exist", dir.display()));

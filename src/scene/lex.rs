@@ -7,6 +7,7 @@
 use std::fmt;
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read};
+use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
 
 use flate2::bufread::MultiGzDecoder;
@@ -296,13 +297,15 @@ impl Lexer {
         ))
     }
 
-    /// A whole number in `0..=max`.
-    pub fn expect_uint(&mut self, what: impl fmt::Display + Copy, max: u64) -> Result<u64> {
+    /// A whole number in `range`, which the message names whole, so that a value out of it is told
+    /// the one range it must lie in.
+    pub fn expect_uint(&mut self, what: impl fmt::Display + Copy, range: RangeInclusive<u64>) -> Result<u64> {
         let (tok, value) = self.expect_int(what)?;
-        if value < 0 || value as u64 > max {
+        if !u64::try_from(value).is_ok_and(|v| range.contains(&v)) {
+            let (min, max) = (range.start(), range.end());
             return Err(self.error_at(
                 &tok,
-                format!("expected {what} between 0 and {max}, found {value}"),
+                format!("expected {what} between {min} and {max}, found {value}"),
             ));
         }
         Ok(value as u64)
@@ -326,10 +329,16 @@ impl Lexer {
     /// True if the next token looks like a number (used for optional trailing numbers).
     pub fn peek_is_number(&mut self) -> Result<bool> {
         Ok(match self.peek()? {
-            Some(tok) => self
-                .text(&tok)
-                .first()
-                .is_some_and(|b| b.is_ascii_digit() || matches!(b, b'-' | b'+' | b'.')),
+            Some(tok) => {
+                let text = self.text(&tok);
+                // `nan` and `inf` are numbers to a reader, so an optional number that is one is
+                // refused as not finite, not taken for the next keyword.
+                text.first()
+                    .is_some_and(|b| b.is_ascii_digit() || matches!(b, b'-' | b'+' | b'.'))
+                    || [&b"nan"[..], b"inf", b"infinity"]
+                        .iter()
+                        .any(|w| text.eq_ignore_ascii_case(w))
+            }
             None => false,
         })
     }

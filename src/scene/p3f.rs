@@ -121,7 +121,7 @@ impl Parser {
             b"env" => self.env(),
             b"accel" => self.accel(),
             b"spp" => {
-                self.scene.spp = self.lx.expect_uint("the samples per pixel", 1 << 16)? as u32;
+                self.scene.spp = self.lx.expect_uint("the samples per pixel", 0..=1 << 16)? as u32;
                 Ok(())
             }
             b"l" => self.point_light(),
@@ -192,8 +192,8 @@ impl Parser {
         self.lx.expect_word("hither", ctx)?;
         let hither = self.lx.expect_f32("the near distance (hither)")?;
         let res_tok = self.lx.expect_word("resolution", ctx)?;
-        let width = self.lx.expect_uint("the image width", u32::MAX as u64)? as u32;
-        let height = self.lx.expect_uint("the image height", u32::MAX as u64)? as u32;
+        let width = self.lx.expect_uint("the image width", 0..=u32::MAX as u64)? as u32;
+        let height = self.lx.expect_uint("the image height", 0..=u32::MAX as u64)? as u32;
         if let Err(e) = check_resolution(width, height) {
             return Err(self.lx.error_at(&res_tok, e));
         }
@@ -258,7 +258,7 @@ impl Parser {
     fn accel(&mut self) -> Result<()> {
         let value = self
             .lx
-            .expect_uint("the accelerator (0 none, 1 grid, 2 BVH, 3 4-wide BVH)", 3)?;
+            .expect_uint("the accelerator (0 none, 1 grid, 2 BVH, 3 4-wide BVH)", 0..=3)?;
         self.scene.accel = Some(match value {
             0 => AccelHint::None,
             1 => AccelHint::Grid,
@@ -286,20 +286,15 @@ impl Parser {
         let edge_u = self.lx.expect_vec3("the area light's first edge")?;
         let edge_v = self.lx.expect_vec3("the area light's second edge")?;
         let color = self.color("the area light colour")?;
-        let grid_tok = self.lx.peek()?;
-        let grid = self.lx.expect_uint("the area light's grid resolution", 1024)? as u32;
+        let grid = self
+            .lx
+            .expect_uint("the area light's grid resolution", 1..=1024)? as u32;
         if edge_u.cross(edge_v).length_squared() == 0.0 {
             let tok = edge_tok.expect("a number was read");
             return Err(self.lx.error_at(
                 &tok,
                 "the area light's edges are parallel or zero: the quad has no area",
             ));
-        }
-        if grid == 0 {
-            let tok = grid_tok.expect("a number was read");
-            return Err(self
-                .lx
-                .error_at(&tok, "expected a grid resolution of at least 1, found 0"));
         }
         self.scene.area_lights.push(super::QuadLight {
             corner,

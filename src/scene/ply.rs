@@ -199,7 +199,8 @@ fn read_header(lx: &mut Lexer) -> Result<Header> {
             b"element" => {
                 let name = lx.expect_token("an element name")?;
                 let name = String::from_utf8_lossy(lx.text(&name)).into_owned();
-                let count = lx.expect_uint(&format!("the number of \"{name}\" elements"), u32::MAX.into())?;
+                let count =
+                    lx.expect_uint(&format!("the number of \"{name}\" elements"), 0..=u32::MAX.into())?;
                 elements.push(Element {
                     name,
                     count,

@@ -31,6 +31,12 @@ fn a_bad_output_is_refused_before_the_scene_is_loaded() {
             at("missing_dir")
         )
     );
+    // A name that ends in a separator names a directory, not an image (it failed after the render).
+    let slash = format!("{}/", at("q.png"));
+    assert_eq!(
+        render(&["-o", &slash]),
+        format!("whitted: {slash}: names a directory (it ends in a path separator): expected a file name\n")
+    );
     // A directory where the image would go is not replaced.
     std::fs::create_dir(d.join("taken.png")).unwrap();
     let taken = at("taken.png");

@@ -156,6 +156,41 @@ fn counts_larger_than_the_data() {
 }
 
 #[test]
+fn a_not_finite_optional_number_is_refused_as_a_number() {
+    // The 12th material number (the roughness) and a light's optional colour: `nan` and `inf` were
+    // taken for the next keyword ("unknown keyword \"nan\"").
+    for word in ["nan", "NaN", "inf", "-inf", "Infinity"] {
+        fails(
+            &after_camera(&format!("f 1 1 1 1 1 1 1 1 10 0 1 {word}\ns 0 0 0 1\n")),
+            8,
+            &format!("expected a finite number for the material, found \"{word}\""),
+        );
+        fails(
+            &after_camera(&format!("l 0 5 0 {word} 1 1\n")),
+            8,
+            "expected a finite number",
+        );
+    }
+}
+
+#[test]
+fn an_area_lights_grid_is_told_its_one_range() {
+    // 0 and 1,000,000 get the same range, 1 to 1024 (0 was once "between 0 and 1024" in one message
+    // and "at least 1" in another).
+    let lq = |grid: &str| after_camera(&format!("lq -1.5 5 1 3 0 0 0 0 -3 0.9 0.9 0.9 {grid}\n"));
+    for grid in ["0", "1000000", "-1"] {
+        let e = fails(
+            &lq(grid),
+            8,
+            "expected the area light's grid resolution between 1 and 1024",
+        );
+        assert!(e.message.ends_with(&format!("found {grid}")), "{e}");
+    }
+    parse(&lq("1")).unwrap();
+    parse(&lq("1024")).unwrap();
+}
+
+#[test]
 fn resolutions() {
     let res = |w: &str, h: &str| CAMERA.replace("resolution 64 48", &format!("resolution {w} {h}"));
     fails(&res("0", "48"), 7, "resolution must be between 1 and");
