@@ -67,7 +67,13 @@ impl Error {
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         if let Some(path) = &self.path {
-            write!(f, "{}:", path.display())?;
+            // A name with a line break or other control character, or that is not UTF-8, is
+            // escaped (quoted, as `{:?}` writes it), so that the message stays one line that says
+            // exactly which file.
+            match path.to_str() {
+                Some(s) if !s.chars().any(char::is_control) => write!(f, "{s}:")?,
+                _ => write!(f, "{path:?}:")?,
+            }
             match self.location {
                 Location::File => {}
                 Location::LineCol(line, col) => write!(f, "{line}:{col}:")?,

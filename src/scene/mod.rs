@@ -74,7 +74,8 @@ pub enum Format {
 impl Format {
     /// The format of `path` from its extension, if it is one of ours.
     pub fn of(path: &Path) -> Option<Format> {
-        let name = path.file_name()?.to_str()?.to_ascii_lowercase();
+        // Lossy: a name that is not UTF-8 still ends in an ASCII extension.
+        let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
         let name = name.strip_suffix(".gz").unwrap_or(&name);
         let ext = name.rsplit_once('.')?.1;
         match ext {

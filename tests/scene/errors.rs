@@ -156,6 +156,31 @@ fn counts_larger_than_the_data() {
 }
 
 #[test]
+fn odd_file_names_are_read_and_named_exactly() {
+    use std::ffi::OsStr;
+    use std::os::unix::ffi::OsStrExt;
+    let dir = tempfile::tempdir().unwrap();
+    // Not UTF-8, but a .p3f: read as one (it was "unknown scene format").
+    let odd = dir.path().join(OsStr::from_bytes(b"ok\xfe.p3f"));
+    std::fs::copy(common::root().join("scenes/balls_low.p3f"), &odd).unwrap();
+    scene::load(&odd).unwrap();
+    // Messages name such paths escaped and quoted, on one line.
+    let missing = Path::new(OsStr::from_bytes(b"no\xfe.p3f"));
+    let e = scene::load(missing).unwrap_err().to_string();
+    assert!(e.starts_with("\"no\\xFE.p3f\": cannot open: "), "{e}");
+    let e = scene::load(Path::new("a\nb.p3f")).unwrap_err().to_string();
+    assert!(
+        e.starts_with("\"a\\nb.p3f\": cannot open: ") && !e.contains('\n'),
+        "{e}"
+    );
+    // A plain name is written as it is.
+    let e = scene::load(Path::new("plain-missing.p3f"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("plain-missing.p3f: cannot open: "), "{e}");
+}
+
+#[test]
 fn a_not_finite_optional_number_is_refused_as_a_number() {
     // The 12th material number (the roughness) and a light's optional colour: `nan` and `inf` were
     // taken for the next keyword ("unknown keyword \"nan\"").
