@@ -126,3 +126,43 @@ fn threads_out_of_range_are_a_usage_error() {
         }
     }
 }
+
+/// `--partial` into an image's name writes a part all the same (scripts name parts freely), but says
+/// so: a `.png` that holds no PNG would surprise whoever opens it.
+#[test]
+fn a_partial_written_under_an_image_name_is_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("a.png");
+    let png = png.to_str().unwrap();
+    let args = [
+        "render",
+        "scenes/balls_low.p3f",
+        "--width",
+        "8",
+        "--quiet",
+        "--partial",
+        "-o",
+        png,
+    ];
+    let out = common::whitted(&args);
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let warning = format!(
+        "whitted: warning: {png} gets a .partial part of the frame, not an image, though its name says one; \
+         `whitted merge` makes the image"
+    );
+    assert!(err.lines().any(|l| l == warning), "{err}");
+    // A .partial name needs no such word.
+    let part = dir.path().join("a.partial");
+    let out = common::whitted(&[
+        "render",
+        "scenes/balls_low.p3f",
+        "--width",
+        "8",
+        "--quiet",
+        "-o",
+        part.to_str().unwrap(),
+    ]);
+    assert!(out.status.success());
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("gets a .partial part"));
+}

@@ -8,6 +8,7 @@ use std::path::PathBuf;
 
 use whitted::accel::{AccelKind, BuildOptions};
 use whitted::parts::partial::PartSettings;
+use whitted::render::film::ImageFormat;
 use whitted::render::progressive::Progressive;
 use whitted::render::{Options, tiles};
 use whitted::scene::Scene;
@@ -67,7 +68,14 @@ impl Plan {
         }
         args.camera.apply(&mut scene.camera)?;
         args.spd_refuses()?;
-        let (spp, warnings) = spp_per_pass(args, scene);
+        let (spp, mut warnings) = spp_per_pass(args, scene);
+        if args.partial && ImageFormat::of(&args.output).is_ok() {
+            warnings.push(format!(
+                "{} gets a .partial part of the frame, not an image, though its name says one; \
+                 `whitted merge` makes the image",
+                args.output.display()
+            ));
+        }
         let depth = args.max_depth.unwrap_or(DEFAULT_DEPTH);
         let options = Options {
             spp,
