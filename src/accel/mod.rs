@@ -206,21 +206,13 @@ impl<'a> Accel<'a> {
 
     /// The wide BVHs' instruction set; `None` for the other structures.
     pub fn simd(&self) -> Option<Isa> {
-        match self {
-            Accel::Bvh4(b) => Some(b.simd()),
-            Accel::Bvh8(b) => Some(b.simd()),
-            _ => None,
-        }
+        each!(self, s => Structure::simd(s))
     }
 
     /// Makes a wide BVH use `simd` (tests and benchmarks compare the paths); false, with nothing
     /// changed, when the CPU lacks it or the structure has no such choice.
     pub fn set_simd(&mut self, simd: Isa) -> bool {
-        match self {
-            Accel::Bvh4(b) => b.set_simd(simd),
-            Accel::Bvh8(b) => b.set_simd(simd),
-            _ => false,
-        }
+        each!(self, s => Structure::set_simd(s, simd))
     }
 
     /// Finds the closest hit with `t` in `(t_min, hit.t)`; updates `hit` and returns true if there is one.

@@ -5,6 +5,7 @@
 use super::packet::{HitPacket, RayPacket, ray_by_ray};
 use super::policy::HitPolicy;
 use super::prims::{Hit, Prims};
+use super::wide::isa::Isa;
 use crate::geometry::ray::Ray;
 
 /// An acceleration structure over a scene's primitives. Each verb is generic over the hit policy
@@ -18,6 +19,17 @@ pub trait Structure<'a> {
 
     /// True where a packet's rays are traced together.
     fn has_packet_kernel(&self) -> bool {
+        false
+    }
+
+    /// The instruction set of the structure's SIMD kernels, where it has a choice of them.
+    fn simd(&self) -> Option<Isa> {
+        None
+    }
+
+    /// Makes the kernels use `simd`; false, with nothing changed, when the CPU lacks it or the
+    /// structure has no such choice.
+    fn set_simd(&mut self, _simd: Isa) -> bool {
         false
     }
 

@@ -13,7 +13,7 @@
 //! (`tri4.rs`). Wider nodes mean fewer node visits and fewer stack operations per ray (`profiles/`).
 
 mod collapse;
-mod isa;
+pub(crate) mod isa;
 mod lanes;
 mod order;
 mod packet;
@@ -247,6 +247,14 @@ macro_rules! wide_structure {
 
             fn has_packet_kernel(&self) -> bool {
                 true
+            }
+
+            fn simd(&self) -> Option<Isa> {
+                Some($bvh::simd(self))
+            }
+
+            fn set_simd(&mut self, simd: Isa) -> bool {
+                $bvh::set_simd(self, simd)
             }
 
             #[inline(always)]
