@@ -4,10 +4,10 @@
 use clap::Args;
 use glam::Vec3;
 use whitted::accel::{AccelKind, BuildOptions, bvh2};
-use whitted::render::{Kernel, Options, spd};
-use whitted::scene::{Camera, Scene};
+use whitted::render::{Kernel, MAX_SPP, Options, spd};
+use whitted::scene::{Camera, MAX_RESOLUTION, Scene};
 
-use super::values::{number, point};
+use super::values::{angle, point};
 
 /// The bounce limit when `--max-depth` is not given.
 pub use whitted::render::DEFAULT_DEPTH;
@@ -15,11 +15,12 @@ pub use whitted::render::DEFAULT_DEPTH;
 /// The frame's size, the threads and the structure and kernel that trace it (`render`, `bench`, `view`).
 #[derive(Args)]
 pub struct FrameArgs {
-    /// Image width (keeps the vertical field of view; the height follows the aspect ratio if not given).
-    #[arg(long)]
+    /// Image width, 1 to 65536 (keeps the vertical field of view; the height follows the aspect ratio
+    /// if not given).
+    #[arg(long, value_parser = side())]
     pub width: Option<u32>,
-    /// Image height.
-    #[arg(long)]
+    /// Image height, 1 to 65536.
+    #[arg(long, value_parser = side())]
     pub height: Option<u32>,
     /// Worker threads, 1 to 1024 (default: all cores).
     #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=1024))]
@@ -48,6 +49,16 @@ impl FrameArgs {
     }
 }
 
+/// The parser of an image side: 1 to [`MAX_RESOLUTION`].
+fn side() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..=MAX_RESOLUTION as i64)
+}
+
+/// The parser of `--spp`: 0 to [`MAX_SPP`].
+pub fn spp() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(0..=MAX_SPP as i64)
+}
+
 /// The resolution after `--width`/`--height`: one given alone keeps the file's aspect ratio. It is
 /// checked with the rest of the [`Options`] it goes into.
 fn resolution(scene: &Scene, width: Option<u32>, height: Option<u32>) -> (u32, u32) {
@@ -73,8 +84,8 @@ pub struct CameraArgs {
     /// The up vector, `X,Y,Z` (overrides `up`).
     #[arg(long, value_name = "X,Y,Z", value_parser = point, allow_hyphen_values = true)]
     pub up: Option<Vec3>,
-    /// The vertical field of view in degrees, edge to edge (overrides `angle`).
-    #[arg(long, value_name = "DEG", value_parser = number, allow_hyphen_values = true)]
+    /// The vertical field of view in degrees, edge to edge, between 0 and 180 (overrides `angle`).
+    #[arg(long, value_name = "DEG", value_parser = angle, allow_hyphen_values = true)]
     pub fov: Option<f32>,
 }
 

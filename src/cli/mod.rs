@@ -1,9 +1,12 @@
 //! Command-line interface: parses arguments with clap and calls the library.
 //!
-//! Exit statuses: 0 when the command is done; 1 on an error, reported in one line on stderr
-//! (`whitted: path:line:col: message`); 2 on a usage error (clap's: an unknown option, a value out of
-//! its range); 130 when Ctrl-C interrupted a render, after writing what was finished and saying so on
-//! stderr (128 + SIGINT, what a shell reports for a process the signal killed).
+//! Exit statuses: 0 when the command is done; 1 on an error in what the command met (a file, the
+//! disk, the scene), reported in one line on stderr (`whitted: path:line:col: message`); 2 on a usage
+//! error, the command line's own fault (clap's: an unknown option, a value that does not parse or is
+//! out of its range; ours, once the scene is read: options that do not go together, or overrides that
+//! make an impossible frame or camera); 130 when Ctrl-C interrupted a render, after writing what was
+//! finished and saying so on stderr (128 + SIGINT, what a shell reports for a process the signal
+//! killed).
 
 mod bench;
 mod console;
@@ -54,6 +57,20 @@ const INTERRUPTED: u8 = 130;
 /// The exit status of a usage error (clap's).
 const USAGE: u8 = 2;
 
+/// Why a command failed, which sets its exit status.
+pub enum Failure {
+    /// Something the command met: a file, the disk, the scene (status 1).
+    Error(whitted::Error),
+    /// The command line itself, found wrong once the scene is read (status 2, as clap's usage errors).
+    Usage(whitted::Error),
+}
+
+impl From<whitted::Error> for Failure {
+    fn from(e: whitted::Error) -> Self {
+        Failure::Error(e)
+    }
+}
+
 /// Reports a command line clap refused, as clap does (help and version included), except `embree`
 /// asked of a build without it: one line that says how to build with it, and the usage error status.
 fn usage_error(e: clap::Error) -> ExitCode {
@@ -72,21 +89,25 @@ pub fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => return usage_error(e),
     };
-    let done = |result: whitted::Result<()>| result.map(|()| Ended::Done);
+    let done = |result: Result<(), Failure>| result.map(|()| Ended::Done);
     let result = match cli.command {
-        Command::Info(args) => done(info::run(&args)),
+        Command::Info(args) => done(info::run(&args).map_err(Failure::from)),
         Command::Render(args) => render::run(&args),
         Command::Bench(args) => done(bench::run(&args)),
-        Command::Merge(args) => done(merge::run(&args)),
+        Command::Merge(args) => done(merge::run(&args).map_err(Failure::from)),
         #[cfg(feature = "view")]
         Command::View(args) => done(view::run(&args)),
     };
     match result {
         Ok(Ended::Done) => ExitCode::SUCCESS,
         Ok(Ended::Interrupted) => ExitCode::from(INTERRUPTED),
-        Err(e) => {
+        Err(Failure::Error(e)) => {
             console::note(format!("whitted: {e}"));
             ExitCode::FAILURE
+        }
+        Err(Failure::Usage(e)) => {
+            console::note(format!("whitted: {e}"));
+            ExitCode::from(USAGE)
         }
     }
 }

@@ -45,6 +45,18 @@ pub fn positive(s: &str) -> Result<f32, String> {
     }
 }
 
+/// An angle of a field of view: above 0 and below 180 degrees.
+pub fn angle(s: &str) -> Result<f32, String> {
+    let v = number(s)?;
+    if v > 0.0 && v < 180.0 {
+        Ok(v)
+    } else {
+        Err(format!(
+            "expected an angle between 0 and 180 degrees (both excluded), found {s}"
+        ))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

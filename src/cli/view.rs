@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 use whitted::view::{self, Config, state::MAX_VIEW_DEPTH};
 
+use super::Failure;
 use super::frame::{DEFAULT_DEPTH, FrameArgs};
 use super::setup::{load_scene, thread_pool, warn};
 
@@ -36,11 +37,11 @@ pub struct ViewArgs {
 }
 
 /// Opens the window.
-pub fn run(args: &ViewArgs) -> whitted::Result<()> {
+pub fn run(args: &ViewArgs) -> Result<(), Failure> {
     let scene = load_scene(args.scene.as_deref())?;
     warn(&scene.warnings);
     let options = args.frame.options(&scene, args.max_depth);
-    options.validate()?;
+    options.validate().map_err(Failure::Usage)?;
     let pool = thread_pool(args.frame.threads)?;
     let name = match &args.scene {
         Some(path) => path
@@ -59,5 +60,5 @@ pub fn run(args: &ViewArgs) -> whitted::Result<()> {
         frames: args.frames,
         screenshot: args.screenshot.clone(),
     };
-    view::run(&scene, &pool, &config)
+    Ok(view::run(&scene, &pool, &config)?)
 }

@@ -8,7 +8,7 @@ use std::process::Command;
 
 use serde_json::Value;
 
-use crate::common::{self, failure, int, json, root, stdout, whitted};
+use crate::common::{self, int, json, root, stdout, usage_failure, whitted};
 
 /// The SPD Readme's counts (eye hits, reflected, refracted, shadow) at the default sizes.
 const TETRA: [u64; 4] = [49_788, 0, 0, 46_112];
@@ -539,7 +539,7 @@ fn bench_spd_times_the_procedures_frames() {
     assert_eq!(int(&v["rays_per_frame"]["primary"]), 513 * 513);
     assert_eq!((int(&v["width"]), int(&v["max_depth"])), (512, 4));
     assert_eq!(v["spd"]["within_10_percent"], true);
-    let last = failure(&whitted(&[
+    let last = usage_failure(&whitted(&[
         "bench",
         "scenes/spd/tetra_default.nff",
         "--spd",
@@ -601,14 +601,14 @@ fn camera_overrides_render_the_camera_they_describe() {
     ];
     assert_eq!(render("same.png", &file), plain);
     assert_ne!(render("narrow.png", &["--fov", "30"]), plain);
-    let last = failure(&whitted(&[
+    let last = usage_failure(&whitted(&[
         "render", "--from", "1,2,3", "--at", "1,2,3", "-o", "x.png",
     ]));
     assert_eq!(
         last,
         "whitted: the camera of --from/--at/--up/--fov: \"from\" and \"at\" are the same point (1 2 3)"
     );
-    let last = failure(&whitted(&[
+    let last = usage_failure(&whitted(&[
         "bench",
         "scenes/spd/tetra_default.nff",
         "--up",
@@ -623,7 +623,7 @@ fn camera_overrides_render_the_camera_they_describe() {
 #[test]
 fn spd_refuses_the_options_that_change_its_frame() {
     for option in [["--spp", "4"], ["--passes", "2"], ["--height", "100"]] {
-        let last = failure(&whitted(&[
+        let last = usage_failure(&whitted(&[
             "render", "--spd", option[0], option[1], "-o", "x.png",
         ]));
         assert!(

@@ -467,6 +467,69 @@ fn threads_give_the_same_bytes_and_zero_is_a_usage_error() {
     );
 }
 
+/// One rule for the exit status (issue 34, case 12): a value out of its range is a usage error,
+/// status 2, refused by the argument parser before the scene is read, for `--spp`, `--width`,
+/// `--height` and `--fov` as for `--threads` and `--max-depth` (they were status 1, found by the
+/// render's checks); so are the command line's faults found once the scene is read: options that do
+/// not go together, and overrides that make an impossible frame or camera.
+#[test]
+fn every_option_out_of_range_is_a_usage_error() {
+    let invalid = |value: &str, option: &str, message: &str| {
+        format!("error: invalid value '{value}' for '{option}': {message}")
+    };
+    let angle = |v: &str| format!("expected an angle between 0 and 180 degrees (both excluded), found {v}");
+    for (args, first_line) in [
+        (
+            ["--spp", "70000"],
+            invalid("70000", "--spp <SPP>", "70000 is not in 0..=65536"),
+        ),
+        (
+            ["--width", "0"],
+            invalid("0", "--width <WIDTH>", "0 is not in 1..=65536"),
+        ),
+        (
+            ["--width", "100000"],
+            invalid("100000", "--width <WIDTH>", "100000 is not in 1..=65536"),
+        ),
+        (
+            ["--height", "0"],
+            invalid("0", "--height <HEIGHT>", "0 is not in 1..=65536"),
+        ),
+        (["--fov", "0"], invalid("0", "--fov <DEG>", &angle("0"))),
+        (["--fov", "180"], invalid("180", "--fov <DEG>", &angle("180"))),
+    ] {
+        render_usage(&[&[DEFAULT][..], &args].concat(), &first_line);
+        usage_error(
+            &[&["bench", DEFAULT, "--frames", "1"][..], &args].concat(),
+            &first_line,
+        );
+    }
+    // Found once the scene is read: the height that --width gives the file's 4:3 aspect ratio, a
+    // camera the overrides make impossible, options that do not go together. One line, status 2, and
+    // no image.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    for (args, last) in [
+        (
+            &["--width", "65536"][..],
+            "whitted: resolution 65536x49152 has more than 268435456 pixels",
+        ),
+        (
+            &["--from", "1,2,3", "--at", "1,2,3"],
+            "whitted: the camera of --from/--at/--up/--fov: \"from\" and \"at\" are the same point (1 2 3)",
+        ),
+        (
+            &["--every", "2"],
+            "whitted: --every and --progressive-out need --passes 2 or more",
+        ),
+    ] {
+        let render = ["render", DEFAULT, "-o", out.to_str().unwrap()];
+        let err = fails(&[&render[..], args].concat(), 2);
+        assert_eq!(err.lines().last(), Some(last), "{err}");
+        assert!(!out.exists());
+    }
+}
+
 /// What a scene file holds, counted from its text as `info` documents it: spheres, triangles (a
 /// polygon of N vertices is N - 2), boxes, planes, cones, point lights, area lights, and materials (one
 /// per `f`, plus the default grey one when an object comes before the first `f`).

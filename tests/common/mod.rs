@@ -157,7 +157,17 @@ pub fn fails(args: &[&str], status: i32) -> String {
 
 /// The error line of a failed run: exit status 1, no panic, and a `whitted: ` line last, returned.
 pub fn failure(out: &Output) -> String {
-    let err = failed(out, 1);
+    failure_with(out, 1)
+}
+
+/// The error line of a run the command line's own fault failed once the scene was read: exit status
+/// 2 (a usage error), no panic, and a `whitted: ` line last, returned.
+pub fn usage_failure(out: &Output) -> String {
+    failure_with(out, 2)
+}
+
+fn failure_with(out: &Output, status: i32) -> String {
+    let err = failed(out, status);
     let last = err.lines().last().unwrap_or_default().to_string();
     assert!(last.starts_with("whitted: "), "{err}");
     last

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 use whitted::accel::AccelKind;
 
-use crate::cli::frame::{CameraArgs, FrameArgs};
+use crate::cli::frame::{CameraArgs, FrameArgs, spp};
 
 /// Arguments of `whitted bench`.
 #[derive(Args)]
@@ -18,8 +18,8 @@ pub struct BenchArgs {
     pub frames: u32,
     #[command(flatten)]
     pub frame: FrameArgs,
-    /// Samples per pixel (default: the file's).
-    #[arg(long)]
+    /// Samples per pixel, 0 to 65536 (default: the file's).
+    #[arg(long, value_parser = spp())]
     pub spp: Option<u32>,
     /// Most bounces after the primary hit (default 6, at most 64).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=whitted::render::MAX_DEPTH as i64))]

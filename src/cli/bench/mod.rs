@@ -13,18 +13,19 @@ use whitted::accel::{Accel, AccelKind, Prims};
 
 pub use args::BenchArgs;
 
+use super::Failure;
 use super::report::Report;
 use super::setup::{load_scene, thread_pool, warn};
 
 /// Renders the frames and prints their timing.
-pub fn run(args: &BenchArgs) -> whitted::Result<()> {
+pub fn run(args: &BenchArgs) -> Result<(), Failure> {
     let path = plan::scene(args)?;
     let start = Instant::now();
     let mut scene = load_scene(Some(&path))?;
     warn(&scene.warnings);
-    args.camera.apply(&mut scene.camera)?;
+    args.camera.apply(&mut scene.camera).map_err(Failure::Usage)?;
     let loaded = start.elapsed();
-    let options = plan::options(args, &scene)?;
+    let options = plan::options(args, &scene).map_err(Failure::Usage)?;
     let pool = thread_pool(args.frame.threads)?;
     let build = |kind: AccelKind| {
         let start = Instant::now();
@@ -41,8 +42,8 @@ pub fn run(args: &BenchArgs) -> whitted::Result<()> {
         .map(|t| t.report(&path, &options, loaded, threads))
         .collect();
     if args.json {
-        print::json(&timed, &reports)
+        Ok(print::json(&timed, &reports)?)
     } else {
-        print::text(&timed, &reports)
+        Ok(print::text(&timed, &reports)?)
     }
 }

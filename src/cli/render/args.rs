@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
-use crate::cli::frame::{BuildKind, CameraArgs, FrameArgs, spd_refuses};
+use crate::cli::frame::{BuildKind, CameraArgs, FrameArgs, spd_refuses, spp};
 use crate::cli::report::Format;
 use crate::cli::values::{non_negative, positive};
 
@@ -44,8 +44,8 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(2..=64))]
     pub bins: u32,
     /// Samples per pixel (overrides the file's `spp`): 0 for one ray through each pixel centre, else
-    /// n x n jittered samples (rounded up to a square).
-    #[arg(long)]
+    /// n x n jittered samples (rounded up to a square), at most 65536.
+    #[arg(long, value_parser = spp())]
     pub spp: Option<u32>,
     /// Seed of every random number (the same seed gives the same image, on any number of threads).
     #[arg(long, default_value_t = 0)]

@@ -21,6 +21,7 @@ use progress::Progress;
 use resume::{done_already, joined, starting_point};
 use write::{check_outputs, write, write_sums};
 
+use super::Failure;
 use super::console::note;
 use super::report::{Report, image_size};
 use super::setup::{load_scene, thread_pool, warn};
@@ -37,12 +38,12 @@ pub enum Ended {
 static STOP: AtomicBool = AtomicBool::new(false);
 
 /// Renders and writes the image, or, when Ctrl-C stops the render, what is finished.
-pub fn run(args: &RenderArgs) -> whitted::Result<Ended> {
+pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
     let start = Instant::now();
     check_outputs(args)?;
     let mut scene = load_scene(args.scene.as_deref())?;
     warn(&scene.warnings);
-    let plan = Plan::new(args, &mut scene)?;
+    let plan = Plan::new(args, &mut scene).map_err(Failure::Usage)?;
     // A part's sums cover its tiles only; a whole frame is refused here rather than aborted later.
     if plan.tiles.is_none() {
         memory::check(plan.options.width, plan.options.height).map_err(whitted::Error::msg)?;
@@ -76,7 +77,7 @@ pub fn run(args: &RenderArgs) -> whitted::Result<Ended> {
     progress.bar.finish_and_clear();
     let (acc, complete) = rendered?;
     if !complete {
-        return interrupted(&plan, &scene, &acc);
+        return Ok(interrupted(&plan, &scene, &acc)?);
     }
     let rendered = render_start.elapsed();
     write(&plan, &acc)?;
