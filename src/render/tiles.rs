@@ -34,28 +34,93 @@ pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
     out
 }
 
-/// The indices (into [`tiles`]) of part `k` of `n` of a `width` × `height` image.
+/// The indices (into [`tiles`]) of part `k` of `n` of a `width` × `height` image, increasing.
 ///
-/// Tiles are dealt in row-major order, each to the part with the least area so far (the lowest such
-/// part on a tie): the parts' areas differ by at most one tile's, and each part's tiles are spread over
-/// the whole image, so a part is not all sky or all dragon and the parts take about equally long. The
-/// deal depends only on the image size and `n`, so every machine computes the same partition.
+/// The tiles, taken by decreasing area (the whole 16 × 16 ones in row-major order, then the cut ones
+/// of the right column and of the bottom row, the larger kind first, then the corner), are dealt round
+/// the parts as cards are: the `j`-th goes to part `j mod n`. Dealt in decreasing order, the parts'
+/// areas differ by at most the largest tile's (in each round a part's tile is no smaller than a later
+/// part's, and no smaller than its own next one), and each part's tiles are spread over the whole
+/// image, so a part is not all sky or all dragon. Part `k` is found from its own positions
+/// `k, k + n, ...` alone, so choosing it costs the tiles it holds, not the frame's; the deal depends
+/// only on the image size and `n`, so every machine computes the same partition.
 pub fn part(width: u32, height: u32, k: u32, n: u32) -> Vec<u32> {
     assert!(k < n, "part {k} of {n}");
-    let mut area = vec![0u64; n as usize];
-    let mut mine = Vec::new();
-    for (i, t) in tiles(width, height).iter().enumerate() {
-        let (j, _) = area
-            .iter()
-            .enumerate()
-            .min_by_key(|&(j, &a)| (a, j))
-            .expect("n > 0");
-        area[j] += u64::from(t.x1 - t.x0) * u64::from(t.y1 - t.y0);
-        if j == k as usize {
-            mine.push(i as u32);
+    let deal = Deal::new(width, height);
+    let mut mine: Vec<u32> = (u64::from(k)..deal.len())
+        .step_by(n as usize)
+        .map(|j| deal.tile(j))
+        .collect();
+    mine.sort_unstable();
+    mine
+}
+
+/// The tiles of an image by decreasing area: `full` columns × rows of whole tiles, then the cut
+/// tiles of the right column (`cut_x` pixels wide) and of the bottom row (`cut_y` high), the larger
+/// kind first, then the corner.
+struct Deal {
+    columns: u64,
+    full_x: u64,
+    full_y: u64,
+    cut_x: u32,
+    cut_y: u32,
+}
+
+impl Deal {
+    fn new(width: u32, height: u32) -> Self {
+        Deal {
+            columns: u64::from(width.div_ceil(TILE)),
+            full_x: u64::from(width / TILE),
+            full_y: u64::from(height / TILE),
+            cut_x: width % TILE,
+            cut_y: height % TILE,
         }
     }
-    mine
+
+    /// The right column's cut tiles, then the bottom row's, or the other way when those are larger:
+    /// `(count, first row, first column, step is down a column)` of each run.
+    fn edges(&self) -> [(u64, u64, u64, bool); 2] {
+        let right = (if self.cut_x > 0 { self.full_y } else { 0 }, 0, self.full_x, true);
+        let bottom = (
+            if self.cut_y > 0 { self.full_x } else { 0 },
+            self.full_y,
+            0,
+            false,
+        );
+        // A right-column tile is cut_x x 16, a bottom-row one 16 x cut_y.
+        if self.cut_x >= self.cut_y {
+            [right, bottom]
+        } else {
+            [bottom, right]
+        }
+    }
+
+    fn len(&self) -> u64 {
+        let corner = u64::from(self.cut_x > 0 && self.cut_y > 0);
+        let [a, b] = self.edges();
+        self.full_x * self.full_y + a.0 + b.0 + corner
+    }
+
+    /// The index (into [`tiles`]) of the `j`-th tile of the deal.
+    fn tile(&self, mut j: u64) -> u32 {
+        let full = self.full_x * self.full_y;
+        let at = |row: u64, column: u64| (row * self.columns + column) as u32;
+        if j < full {
+            return at(j / self.full_x, j % self.full_x);
+        }
+        j -= full;
+        for (count, row, column, down) in self.edges() {
+            if j < count {
+                return if down {
+                    at(row + j, column)
+                } else {
+                    at(row, column + j)
+                };
+            }
+            j -= count;
+        }
+        at(self.full_y, self.full_x)
+    }
 }
 
 #[cfg(test)]
@@ -88,6 +153,45 @@ mod tests {
                 assert!(hi - lo <= TILE * TILE, "{w}x{h} in {n}: {areas:?}");
             }
         }
+    }
+
+    /// A part of a frame split in as many parts as it has tiles holds one tile, and is chosen from
+    /// its own positions in the deal: 1,048,576 parts of 65536 x 4096 (the most pixels a frame may
+    /// have) each take one tile (dealing all tiles to the least-filled part took parts x tiles steps,
+    /// 55 s for 32 of them from the command line).
+    #[test]
+    fn a_part_costs_its_own_tiles_not_the_frames() {
+        let (w, h) = (65_536, 4_096);
+        let n = tiles(w, h).len() as u32;
+        assert_eq!(n, 1 << 20);
+        let mut seen = std::collections::HashSet::new();
+        for k in [0, 1, 4_095, 4_096, n / 2, n - 2, n - 1] {
+            let p = part(w, h, k, n);
+            assert_eq!(p.len(), 1, "part {k}");
+            assert!(seen.insert(p[0]), "part {k}");
+        }
+        assert_eq!(part(w, h, 0, n), [0]);
+        assert_eq!(part(w, h, 4_097, n), [4_097]);
+        // Beyond the tiles there is nothing left to deal.
+        assert_eq!(part(w, h, n, n + 1), Vec::<u32>::new());
+    }
+
+    /// Cut tiles come after the whole ones, the larger cut kind first: on a 40 x 20 image (whole
+    /// tiles 0 and 1; the right column's 8 x 16 tile 2; the bottom row's 16 x 4 tiles 3 and 4; the
+    /// 8 x 4 corner 5) are dealt in the order 0 1 2 3 4 5, round three parts.
+    #[test]
+    fn the_deal_takes_tiles_by_decreasing_area() {
+        assert_eq!(part(40, 20, 0, 3), [0, 3]);
+        assert_eq!(part(40, 20, 1, 3), [1, 4]);
+        assert_eq!(part(40, 20, 2, 3), [2, 5]);
+        // 20 x 40 (whole tiles 0 and 2; the right column's 4 x 16 tiles 1 and 3; the bottom row's
+        // 16 x 8 tile 4; the corner 5): the bottom row's larger tile comes before the right column's.
+        assert_eq!(part(20, 40, 0, 6), [0]);
+        assert_eq!(part(20, 40, 1, 6), [2]);
+        assert_eq!(part(20, 40, 2, 6), [4]);
+        assert_eq!(part(20, 40, 3, 6), [1]);
+        assert_eq!(part(20, 40, 4, 6), [3]);
+        assert_eq!(part(20, 40, 5, 6), [5]);
     }
 
     #[test]
