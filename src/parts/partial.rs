@@ -84,7 +84,7 @@ impl PartSettings {
     }
 
     /// The fields in which `self` and `other` differ, as `name a vs b`.
-    pub(super) fn differences(&self, other: &PartSettings) -> Vec<String> {
+    pub fn differences(&self, other: &PartSettings) -> Vec<String> {
         let mut out = Vec::new();
         let mut check = |name: &str, a: String, b: String| {
             if a != b {

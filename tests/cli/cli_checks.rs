@@ -46,7 +46,7 @@ fn a_bad_output_is_refused_before_the_scene_is_loaded() {
             "whitted: {taken}: is not a regular file (a directory, a link or a device); refusing to replace it\n"
         )
     );
-    // --progressive-out: its directory is made before the scene is loaded; a file in its way is named.
+    // --progressive-out: a file in its way is named.
     std::fs::write(d.join("file"), "").unwrap();
     let err = render(&[
         "-o",
@@ -56,9 +56,12 @@ fn a_bad_output_is_refused_before_the_scene_is_loaded() {
         "--progressive-out",
         &at("file"),
     ]);
-    assert!(
-        err.starts_with(&format!("whitted: {}: cannot create the directory: ", at("file"))),
-        "{err}"
+    assert_eq!(
+        err,
+        format!(
+            "whitted: {}: is not a directory: --progressive-out cannot keep its snapshots under it\n",
+            at("file")
+        )
     );
     // A .partial output may have any name; the scene is the next thing that fails.
     let err = render(&["-o", &at("out.gif"), "--partial"]);
@@ -108,6 +111,57 @@ fn a_frame_larger_than_the_memory_limit_is_refused_with_both_sizes() {
     assert!(available > 0.0 && available < 3.82, "{err}");
     assert!(!out.exists());
     assert!(!Path::new(&format!("{}.partial", out.display())).exists());
+}
+
+/// Issue 34, cases 7, 8 and 9: every file a render may write is checked before the scene is loaded,
+/// and nothing is made when one is refused: `--progressive-out` naming the output (it made a
+/// directory of that name, rendered, then refused the image: a usage error now), a snapshot name
+/// held by a directory (the render failed after writing half of its passes' mean), and the stop file
+/// `OUT.partial` held by a directory (Ctrl-C then lost every finished tile, exit 1).
+#[test]
+fn every_file_a_render_may_write_is_checked_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let at = |name: &str| d.join(name).to_string_lossy().into_owned();
+    let render = |args: &[&str], status| {
+        fails(
+            &[&["render", "no-such-scene.p3f", "--passes", "4"][..], args].concat(),
+            status,
+        )
+    };
+    let out = at("x.png");
+    assert_eq!(
+        render(&["-o", &out, "--progressive-out", &out], 2),
+        format!(
+            "whitted: {out}: --progressive-out names the output image, or a directory under it: expected a directory of its own for the snapshots\n"
+        )
+    );
+    std::fs::create_dir_all(d.join("pg/x-0002.png")).unwrap();
+    assert_eq!(
+        render(&["-o", &out, "--progressive-out", &at("pg")], 1),
+        format!(
+            "whitted: {}: is not a regular file (a directory, a link or a device); refusing to replace it\n",
+            at("pg/x-0002.png")
+        )
+    );
+    std::fs::create_dir(d.join("x.png.partial")).unwrap();
+    assert_eq!(
+        render(&["-o", &out], 1),
+        format!(
+            "whitted: {out}.partial: is not a regular file (a directory, a link or a device); refusing to \
+             replace it (Ctrl-C keeps the finished tiles in this file)\n"
+        )
+    );
+    let mut entries: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    entries.sort();
+    assert_eq!(
+        entries,
+        ["pg", "x.png.partial"],
+        "nothing made but what the test made"
+    );
 }
 
 /// `--threads` out of 1..=1024 is a usage error (exit status 2) in one line, for every subcommand that

@@ -213,3 +213,149 @@ fn an_interrupted_progressive_render_writes_its_passes_and_resumes() {
         "the resumed image differs from the uninterrupted one"
     );
 }
+
+/// Issue 34, case 10: `--resume` beside a stop file it cannot use (of another render, bit-flipped,
+/// truncated, not a part at all) says which file it ignores and why, renders from the start, and
+/// removes the file once the image is whole, as it removes one it resumed from (it went on silently
+/// and left the stale file). A `.partial` output it cannot use is replaced by the whole part.
+#[test]
+fn resume_names_the_stop_file_it_ignores_and_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let at = |name: &str| d.join(name).to_string_lossy().into_owned();
+    let args = |out: &str, seed: &str| {
+        let args = ["render", "--width", "64", "--seed", seed, "-q", "-o", out];
+        args.map(str::to_string).to_vec()
+    };
+    let run_args = |a: &[String]| run(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let part = at("part.partial");
+    run_args(&args(&part, "3"));
+    let good = std::fs::read(&part).unwrap();
+    let mut flipped = good.clone();
+    flipped[good.len() / 2] ^= 1;
+    let reference = at("reference.png");
+    run_args(&args(&reference, "0"));
+    let out = at("x.png");
+    for (bytes, why) in [
+        (
+            &good[..],
+            "it is of another render (this render's vs the file's: seed 0 vs 3)".to_string(),
+        ),
+        (&flipped[..], "corrupt: checksum".to_string()),
+        (
+            &good[..100],
+            "truncated: 100 bytes where its header describes".to_string(),
+        ),
+        (
+            b"P6 not a part\n".as_slice(),
+            "not a whitted partial file".to_string(),
+        ),
+    ] {
+        std::fs::write(format!("{out}.partial"), bytes).unwrap();
+        let err = run_args(&[args(&out, "0"), vec!["--resume".to_string()]].concat());
+        let warning = format!("whitted: warning: --resume ignores {out}.partial: {why}");
+        assert!(err.starts_with(&warning), "{err}");
+        assert!(err.trim_end().ends_with("; rendering from the start"), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            std::fs::read(&out).unwrap() == std::fs::read(&reference).unwrap(),
+            "{why}"
+        );
+        assert!(
+            !Path::new(&format!("{out}.partial")).exists(),
+            "{why}: the stale file is left"
+        );
+    }
+    // A .partial output of another render is replaced by this one's part.
+    let err = run_args(&[args(&part, "0"), vec!["--resume".to_string()]].concat());
+    assert!(
+        err.contains(&format!("--resume ignores {part}: it is of another render")),
+        "{err}"
+    );
+    let merged = at("merged.png");
+    run(&["merge", "-q", &merged, &part]);
+    assert!(std::fs::read(&merged).unwrap() == std::fs::read(&reference).unwrap());
+}
+
+/// A write that fails in the middle of a progressive render (here a snapshot's name taken by a
+/// directory after the render checked it) keeps the passes finished in `OUT.partial` and says so:
+/// `--resume` then goes on from them into the uninterrupted render's image (issue 34, case 8: the
+/// render failed with the mean of 2 of 4 passes written and nothing to resume from).
+#[test]
+fn a_write_failing_mid_render_keeps_the_passes_finished() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("c.png").to_string_lossy().into_owned();
+    let snaps = d.join("snaps");
+    let args = [
+        "render",
+        "--width",
+        "64",
+        "--passes",
+        "200",
+        "--threads",
+        "1",
+        "-q",
+        "-o",
+        &out,
+        "--progressive-out",
+        snaps.to_str().unwrap(),
+    ];
+    let child = spawn(&args);
+    let pid = child.id() as libc::pid_t;
+    // Stopped (SIGSTOP) once a snapshot is written, the render cannot pass the names taken next.
+    let mut polls = 0;
+    while names_or_none(&snaps).is_empty() {
+        polls += 1;
+        assert!(polls < 10_000, "gave up waiting for the first snapshot");
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGSTOP) }, 0);
+    let written = names_or_none(&snaps).len() as u32;
+    for k in written + 1..=200 {
+        std::fs::create_dir(snaps.join(format!("c-{k:04}.png"))).unwrap();
+    }
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGCONT) }, 0);
+    let output = child.wait_with_output().unwrap();
+    let err = String::from_utf8(output.stderr).unwrap();
+    assert_eq!(output.status.code(), Some(1), "{err}");
+    let kept = number_between(&err, "; the ", " passes finished are kept in ");
+    assert!(kept > written, "{err}");
+    let taken = snaps.join(format!("c-{kept:04}.png"));
+    assert_eq!(
+        err,
+        format!(
+            "whitted: {}: cannot write the image: is not a regular file (a directory, a link or a device); \
+             refusing to replace it; \
+             the {kept} passes finished are kept in {out}.partial: the same command with --resume goes on \
+             from them\n",
+            taken.display()
+        )
+    );
+    for name in names(&snaps) {
+        if std::fs::metadata(snaps.join(&name)).unwrap().is_dir() {
+            std::fs::remove_dir(snaps.join(name)).unwrap();
+        }
+    }
+    let resumed = run(&[&args[..], &["--resume"]].concat());
+    assert!(
+        resumed.starts_with(&format!(
+            "whitted: resuming from {out}.partial: {kept} of 200 passes done\n"
+        )) || resumed.is_empty(),
+        "{resumed}"
+    );
+    let reference = d.join("reference.png").to_string_lossy().into_owned();
+    run(&[
+        "render", "--width", "64", "--passes", "200", "-q", "-o", &reference,
+    ]);
+    assert!(
+        std::fs::read(&out).unwrap() == std::fs::read(&reference).unwrap(),
+        "the resumed image differs from the uninterrupted one"
+    );
+    assert!(!Path::new(&format!("{out}.partial")).exists());
+}
+
+/// The names in `dir`, none if it does not exist yet.
+fn names_or_none(dir: &Path) -> Vec<String> {
+    if dir.is_dir() { names(dir) } else { Vec::new() }
+}

@@ -13,7 +13,6 @@ use whitted::accel::{Accel, Prims};
 use whitted::parts::partial::PartSettings;
 use whitted::render::progressive::Progressive;
 use whitted::render::{Renderer, memory};
-use whitted::scene::Scene;
 
 pub use args::RenderArgs;
 use plan::{Plan, Target};
@@ -62,7 +61,6 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
 
     let render_start = Instant::now();
     let (acc, earlier) = starting_point(&plan, &scene);
-    let resumed = earlier.is_some() || acc.passes() > 0;
     if done_already(&plan, &acc, earlier.is_some()) {
         if !plan.quiet {
             let output = plan.output.display();
@@ -73,16 +71,18 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
         return Ok(Ended::Done);
     }
     let progress = Progress::new(&plan, &acc);
-    let rendered = render_passes(&plan, &pool, &renderer, &progress, acc, earlier);
+    let settings = PartSettings::new(&scene, &plan.options, plan.total_passes);
+    let rendered = render_passes(&plan, &settings, &pool, &renderer, &progress, acc, earlier);
     progress.bar.finish_and_clear();
     let (acc, complete) = rendered?;
     if !complete {
-        return Ok(interrupted(&plan, &scene, &acc)?);
+        return Ok(interrupted(&plan, &settings, &acc)?);
     }
     let rendered = render_start.elapsed();
-    write(&plan, &acc)?;
-    if resumed && matches!(plan.target, Target::Image { .. }) {
-        // The image is whole: the sums it was resumed from are spent.
+    write(&plan, &acc).map_err(|e| kept(&plan, &settings, &acc, e))?;
+    if plan.resume && matches!(plan.target, Target::Image { .. }) {
+        // The image is whole: the sums it was resumed from are spent, as is a stop file --resume
+        // ignored (the warning said why).
         let _ = std::fs::remove_file(plan.stop_file());
     }
     let (times, threads) = ([loaded, built, rendered], pool.current_num_threads());
@@ -101,6 +101,7 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
 /// passes, or in the first pass the tiles finished.
 fn render_passes(
     plan: &Plan,
+    settings: &PartSettings,
     pool: &rayon::ThreadPool,
     renderer: &Renderer,
     progress: &Progress,
@@ -119,7 +120,7 @@ fn render_passes(
         }
         acc = joined(earlier.take(), acc);
         if acc.passes().is_multiple_of(plan.every) && pass < passes.end {
-            write(plan, &acc)?;
+            write(plan, &acc).map_err(|e| kept(plan, settings, &acc, e))?;
         }
     }
     Ok((acc, true))
@@ -140,7 +141,7 @@ fn label(plan: &Plan, pass: u32) -> String {
 /// After Ctrl-C: writes what is finished and says on stderr, even with `--quiet`, what was written
 /// and how to go on. The sums go to the stop file ([`Plan::stop_file`]) for `--resume`; an image render
 /// with whole passes also writes their mean as the image (and its snapshot).
-fn interrupted(plan: &Plan, scene: &Scene, acc: &Progressive) -> whitted::Result<Ended> {
+fn interrupted(plan: &Plan, settings: &PartSettings, acc: &Progressive) -> whitted::Result<Ended> {
     let passes = plan.passes();
     let (done, of) = (acc.passes(), passes.end - passes.start);
     if done == 0 {
@@ -151,8 +152,7 @@ fn interrupted(plan: &Plan, scene: &Scene, acc: &Progressive) -> whitted::Result
     let (tiles, all) = (acc.tile_indices().len(), plan.tile_indices().len());
     let image = matches!(plan.target, Target::Image { .. });
     if image {
-        let settings = PartSettings::new(scene, &plan.options, plan.total_passes);
-        write_sums(plan, &settings, acc, &stop)?;
+        write_sums(plan, settings, acc, &stop)?;
     }
     if !image || tiles == all {
         write(plan, acc)?;
@@ -174,6 +174,26 @@ fn interrupted(plan: &Plan, scene: &Scene, acc: &Progressive) -> whitted::Result
         "whitted: interrupted{what}; the same command with --resume renders the rest"
     ));
     Ok(Ended::Interrupted)
+}
+
+/// The error of a write that failed after the passes in `acc` were rendered (a snapshot, the image:
+/// a full disk, a name taken since it was checked), after keeping their sums in an image render's stop
+/// file, so that the work is not lost: the same command with `--resume` goes on from them. (A
+/// `.partial` render's output is its stop file: there is nowhere else to keep them.)
+fn kept(plan: &Plan, settings: &PartSettings, acc: &Progressive, e: whitted::Error) -> whitted::Error {
+    let stop = plan.stop_file();
+    if matches!(plan.target, Target::Partial { .. }) || write_sums(plan, settings, acc, &stop).is_err() {
+        return e;
+    }
+    whitted::Error {
+        message: format!(
+            "{}; the {} passes finished are kept in {}: the same command with --resume goes on from them",
+            e.message,
+            acc.passes(),
+            stop.display()
+        ),
+        ..e
+    }
 }
 
 /// `--stats`' report of the passes in `acc`, rendered on `threads` threads in `times` (load, build,

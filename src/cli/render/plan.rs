@@ -4,7 +4,7 @@
 //! running the binary and the render itself has nothing left to decide.
 
 use std::ops::Range;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use whitted::accel::{AccelKind, BuildOptions};
 use whitted::parts::partial::PartSettings;
@@ -123,18 +123,21 @@ impl Plan {
         Progressive::for_tiles(w, h, self.tile_indices())
     }
 
-    /// Where an interrupted render writes its sums and `--resume` looks for them: a `.partial` output
-    /// itself, or beside an image `OUT.partial` (`render.png.partial`).
+    /// Where an interrupted render writes its sums and `--resume` looks for them ([`stop_file`]).
     pub fn stop_file(&self) -> PathBuf {
-        match self.target {
-            Target::Partial { .. } => self.output.clone(),
-            Target::Image { .. } => {
-                let mut name = self.output.clone().into_os_string();
-                name.push(".partial");
-                name.into()
-            }
-        }
+        stop_file(&self.output, matches!(self.target, Target::Partial { .. }))
     }
+}
+
+/// Where an interrupted render of `output` writes its sums and `--resume` looks for them: a `.partial`
+/// output itself, or beside an image `OUT.partial` (`render.png.partial`).
+pub fn stop_file(output: &Path, partial: bool) -> PathBuf {
+    if partial {
+        return output.to_path_buf();
+    }
+    let mut name = output.as_os_str().to_os_string();
+    name.push(".partial");
+    name.into()
 }
 
 /// Samples per pixel in each pass: a progressive pass takes one, whatever `--spp` or the file say (with

@@ -5,40 +5,41 @@ use whitted::render::progressive::Progressive;
 use whitted::scene::Scene;
 
 use super::plan::{Plan, Target};
+use crate::cli::setup::warn;
 
 /// Where the render starts: at nothing, or with `--resume` at what the stop file holds of this very
-/// render (same settings, the first passes of this run over its tiles; a file that is missing,
-/// damaged or of another render is ignored). Returns the accumulator to render into and, when the
-/// earlier run stopped in its first pass, the tiles it finished (the accumulator then covers the
-/// others, for that pass).
+/// render (same settings, the first passes of this run over its tiles). A stop file that cannot be
+/// read, is damaged or is of another render is ignored with a warning that says why (it is replaced
+/// or, beside a finished image, removed, as one resumed from is). Returns the accumulator to render
+/// into and, when the earlier run stopped in its first pass, the tiles it finished (the accumulator
+/// then covers the others, for that pass).
 pub fn starting_point(plan: &Plan, scene: &Scene) -> (Progressive, Option<Progressive>) {
     let fresh = || (plan.accumulator(), None);
-    let Some(part) = plan.resume.then(|| Part::read(&plan.stop_file()).ok()).flatten() else {
-        return fresh();
-    };
-    let (passes, tiles) = (plan.passes(), plan.tile_indices());
-    let settings = PartSettings::new(scene, &plan.options, plan.total_passes);
-    let ours = part.tiles.iter().all(|t| tiles.binary_search(t).is_ok());
-    let within = part.passes.start == passes.start && part.passes.end <= passes.end;
-    if part.settings != settings || !within || !ours {
+    let stop = plan.stop_file();
+    if !plan.resume || std::fs::symlink_metadata(&stop).is_err() {
         return fresh();
     }
-    let say = |what: String| {
-        if !plan.quiet {
-            crate::cli::console::note(format!(
-                "whitted: resuming from {}: {what}",
-                plan.stop_file().display()
-            ));
+    let part = match usable(plan, scene) {
+        Ok(part) => part,
+        Err(why) => {
+            warn(&[format!(
+                "--resume ignores {}: {why}; rendering from the start",
+                stop.display()
+            )]);
+            return fresh();
         }
     };
+    let say = |what: String| {
+        if !plan.quiet {
+            crate::cli::console::note(format!("whitted: resuming from {}: {what}", stop.display()));
+        }
+    };
+    let (passes, tiles) = (plan.passes(), plan.tile_indices());
     if part.tiles == tiles {
         if part.passes.len() < passes.len() {
             say(format!("{} of {} passes done", part.passes.len(), passes.len()));
         }
         return (part.into_progressive(), None);
-    }
-    if part.passes.len() != 1 {
-        return fresh();
     }
     say(format!(
         "{} of {} tiles of the first pass done",
@@ -49,6 +50,43 @@ pub fn starting_point(plan: &Plan, scene: &Scene) -> (Progressive, Option<Progre
     let (w, h) = (plan.options.width, plan.options.height);
     let rest = Progressive::for_tiles(w, h, rest.collect());
     (rest, Some(part.into_progressive()))
+}
+
+/// The stop file's part, if this run can go on from it: of this render (same settings), over the
+/// first passes of this run and within its tiles (all of them, or some of them in one pass); else
+/// why not.
+fn usable(plan: &Plan, scene: &Scene) -> Result<Part, String> {
+    let part = Part::read(&plan.stop_file()).map_err(|e| e.message)?;
+    let settings = PartSettings::new(scene, &plan.options, plan.total_passes);
+    let differences = settings.differences(&part.settings);
+    if !differences.is_empty() {
+        return Err(format!(
+            "it is of another render (this render's vs the file's: {})",
+            differences.join(", ")
+        ));
+    }
+    let (passes, tiles) = (plan.passes(), plan.tile_indices());
+    let (start, end) = (part.passes.start, part.passes.end);
+    if start != passes.start || end > passes.end {
+        return Err(format!(
+            "it holds passes {start}..{end}, not the first of this run's {}..{}",
+            passes.start, passes.end
+        ));
+    }
+    if part.part != plan.tiles.unwrap_or((0, 1)) || part.tiles.iter().any(|t| tiles.binary_search(t).is_err())
+    {
+        let (k, n) = part.part;
+        return Err(format!("it holds tiles of part {k}/{n}, not of this run's"));
+    }
+    if part.tiles.len() < tiles.len() && part.passes.len() != 1 {
+        return Err(format!(
+            "it holds {} passes of {} of the {} tiles, where an interrupted run keeps one pass",
+            part.passes.len(),
+            part.tiles.len(),
+            tiles.len()
+        ));
+    }
+    Ok(part)
 }
 
 /// With `--resume` and a `.partial` output: whether the output holds exactly this part of this render

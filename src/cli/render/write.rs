@@ -3,21 +3,35 @@
 use std::path::Path;
 
 use whitted::parts::partial::{Part, PartSettings};
-use whitted::render::film::Film;
+use whitted::render::film::{Film, check_writable};
 use whitted::render::progressive::Progressive;
 use whitted::render::{Options, spd};
 
 use super::args::RenderArgs;
-use super::plan::{Plan, Target};
-use crate::cli::outputs;
+use super::plan::{Plan, Target, stop_file};
+use crate::cli::{Failure, outputs};
 
-/// Checks the files the render writes (the output, and the snapshots of `--progressive-out`), before
-/// the scene is loaded.
-pub fn check_outputs(args: &RenderArgs) -> whitted::Result<()> {
+/// Checks every file the render may write, before the scene is loaded: the output, the stop file an
+/// interrupted image render keeps its sums in, and the snapshots of `--progressive-out`.
+pub fn check_outputs(args: &RenderArgs) -> Result<(), Failure> {
     let partial = args.writes_partial();
     outputs::check(&args.output, partial)?;
+    let stop = stop_file(&args.output, partial);
+    if let Some(dir) = &args.progressive_out {
+        outputs::apart(dir, &args.output, &stop).map_err(Failure::Usage)?;
+    }
+    if !partial {
+        check_writable(&stop).map_err(|e| {
+            whitted::Error::file(
+                &stop,
+                format!("{} (Ctrl-C keeps the finished tiles in this file)", e.message),
+            )
+        })?;
+    }
     match &args.progressive_out {
-        Some(dir) if !partial && args.passes > 1 => outputs::check_snapshots(dir, &args.output),
+        Some(dir) if !partial && args.passes > 1 => {
+            Ok(outputs::check_snapshots(dir, &args.output, args.passes)?)
+        }
         _ => Ok(()),
     }
 }
@@ -31,6 +45,8 @@ pub fn write(plan: &Plan, acc: &Progressive) -> whitted::Result<()> {
     let film = image(&plan.options, acc.film());
     film.write(&plan.output, srgb)?;
     if let Some(dir) = snapshots {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| whitted::Error::file(dir, format!("cannot create the directory: {e}")))?;
         film.write(&outputs::snapshot(dir, &plan.output, acc.passes()), srgb)?;
     }
     Ok(())
