@@ -150,8 +150,129 @@ fn check_coverage(parts: &[(&Path, Part)], settings: &PartSettings) -> Result<()
             problems.push(format!("missing part(s) --tiles {}", missing.join(", ")));
         }
     }
+    problems.extend(interrupted(parts, settings, &gaps));
     Err(Error::msg(format!(
         "the parts do not cover the frame exactly once: {}; nothing written",
         problems.join("; ")
     )))
+}
+
+/// The parts that look interrupted, given the `gaps` in the cover: one that holds fewer tiles than its
+/// `K/N` deals it (Ctrl-C in its first pass keeps the tiles finished), or whose passes end where a gap
+/// begins over its tiles (Ctrl-C after whole passes keeps those): the file to finish with `--resume`.
+fn interrupted(
+    parts: &[(&Path, Part)],
+    settings: &PartSettings,
+    gaps: &[(Range<u32>, Vec<Tile>)],
+) -> Vec<String> {
+    let (w, h) = (settings.width, settings.height);
+    let index = |t: &Tile| (t.y0 / tiles::TILE) * w.div_ceil(tiles::TILE) + t.x0 / tiles::TILE;
+    let resume = "interrupted? the same render command with --resume finishes it";
+    let mut out = Vec::new();
+    for (path, part) in parts {
+        let (k, n) = part.part;
+        let dealt = tiles::part(w, h, k, n).len();
+        if part.tiles.len() < dealt {
+            out.push(format!(
+                "{} holds {} of the {dealt} tiles of part {k}/{n} ({resume})",
+                path.display(),
+                part.tiles.len()
+            ));
+            continue;
+        }
+        let ends_at_gap = gaps.iter().any(|(range, missing)| {
+            range.start == part.passes.end
+                && missing
+                    .iter()
+                    .any(|t| part.tiles.binary_search(&index(t)).is_ok())
+        });
+        if ends_at_gap {
+            out.push(format!(
+                "{} holds passes {}..{} and the next are missing ({resume})",
+                path.display(),
+                part.passes.start,
+                part.passes.end
+            ));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Part `part` of a 40 x 20 frame of 4 passes, holding `tiles` (whose areas are 256, 256, 128,
+    /// 64, 64 and 32 pixels) over `passes`.
+    fn part(part: (u32, u32), tiles: &[u32], passes: Range<u32>) -> Part {
+        let settings = PartSettings {
+            scene: 7,
+            width: 40,
+            height: 20,
+            spp: 1,
+            seed: 3,
+            max_depth: 6,
+            aperture: 0.0,
+            focal: 1.0,
+            roughness: 0.0,
+            passes: 4,
+        };
+        let area = [256, 256, 128, 64, 64, 32];
+        let pixels: usize = tiles.iter().map(|&t| area[t as usize]).sum();
+        Part {
+            settings,
+            part,
+            tiles: tiles.to_vec(),
+            sums: vec![[1.0; 3]; pixels],
+            counts: vec![passes.len() as u32; pixels],
+            passes,
+        }
+    }
+
+    fn merged(parts: &[(&str, Part)]) -> String {
+        let dir = tempfile::tempdir().unwrap();
+        let paths: Vec<PathBuf> = parts
+            .iter()
+            .map(|(name, part)| {
+                let path = dir.path().join(name);
+                part.write(&path).unwrap();
+                path
+            })
+            .collect();
+        let e = merge(&paths).unwrap_err().to_string();
+        e.replace(&format!("{}/", dir.path().display()), "")
+    }
+
+    /// Issue 34, case 18: the merge names the part an interrupted render left, not only the tiles or
+    /// passes missing.
+    #[test]
+    fn an_interrupted_part_is_named() {
+        // Part 1/2 deals tiles 1, 3 and 5; Ctrl-C in its pass kept 1 and 3.
+        let e = merged(&[
+            ("d0.partial", part((0, 2), &[0, 2, 4], 0..4)),
+            ("d1.partial", part((1, 2), &[1, 3], 0..4)),
+        ]);
+        assert_eq!(
+            e,
+            "the parts do not cover the frame exactly once: no part renders passes 0..4 of 1 tile(s), \
+             e.g. pixels x 32..40, y 16..20; d1.partial holds 2 of the 3 tiles of part 1/2 \
+             (interrupted? the same render command with --resume finishes it); nothing written"
+        );
+        // Ctrl-C after two whole passes of 0..4.
+        let e = merged(&[
+            ("d0.partial", part((0, 2), &[0, 2, 4], 0..4)),
+            ("d1.partial", part((1, 2), &[1, 3, 5], 0..2)),
+        ]);
+        assert!(
+            e.ends_with(
+                "d1.partial holds passes 0..2 and the next are missing (interrupted? the same render \
+                 command with --resume finishes it); nothing written"
+            ),
+            "{e}"
+        );
+        // A part merely left out is not called interrupted.
+        let e = merged(&[("d0.partial", part((0, 2), &[0, 2, 4], 0..4))]);
+        assert!(!e.contains("interrupted"), "{e}");
+        assert!(e.contains("missing part(s) --tiles 1/2"), "{e}");
+    }
 }
