@@ -142,7 +142,8 @@ pub struct Whitted<'a> {
     roughness: Vec<f32>,
     /// Most bounces after the primary hit.
     max_depth: u32,
-    /// The SPD rules ([`super::spd`]): a total internal reflection always spawns its mirror ray.
+    /// The SPD rules ([`super::spd`]): a hit on a transmitter always spawns its mirror ray (of weight
+    /// zero where Ks is 0) and, but for a total internal reflection, its refracted ray.
     spd: bool,
 }
 
@@ -269,7 +270,8 @@ impl<'a> Whitted<'a> {
             kr = schlick(cos_i, eta_i, eta_t);
             if let Some(t) = refract(ray.dir, ns, eta_i / eta_t) {
                 let weight = m.transmission * (1.0 - kr);
-                if weight > 0.0 {
+                // The SPD's rule 9 counts the refracted ray even where Schlick leaves it nothing (grazing).
+                if weight > 0.0 || self.spd {
                     out.refracted = Some((Ray::new(p - EPSILON * ng, t.normalize()), weight));
                 }
             } else {
@@ -283,7 +285,9 @@ impl<'a> Whitted<'a> {
         } else {
             m.ks * kr
         };
-        if weight > 0.0 {
+        // The SPD's rules 8 and 9 count a transmitter's mirror ray whatever its Ks (its transmitters
+        // are meant to be reflective too): at Ks 0 it is traced with weight 0 and adds nothing.
+        if weight > 0.0 || (self.spd && m.transmission > 0.0) {
             let mirror = reflect(ray.dir, ns).normalize();
             let roughness = self.roughness[surface.material as usize];
             let dir = if roughness > 0.0 {
