@@ -208,15 +208,8 @@ impl Lexer {
             }
             self.pos += 1;
             if self.pos - start > MAX_TOKEN {
-                return Err(Error::at(
-                    &self.path,
-                    line,
-                    col,
-                    format!(
-                        "expected a keyword or a number, found {} (binary data in a text file?)",
-                        show(&self.buf[start..self.pos])
-                    ),
-                ));
+                let long = &self.buf[start..self.pos];
+                return Err(Error::at(&self.path, line, col, overlong(long)));
             }
         }
         Ok(Some(Tok {
@@ -403,6 +396,19 @@ pub fn parse_int(text: &[u8]) -> Option<i64> {
         v = v * 10 + (b - b'0') as i64;
     }
     Some(if neg { -v } else { v })
+}
+
+/// What is wrong with a word longer than [`MAX_TOKEN`] bytes, of which `long` is the start: a number
+/// too long, a word too long, or binary data (bytes that are not printable ASCII).
+fn overlong(long: &[u8]) -> String {
+    let found = show(long);
+    if long.iter().all(|b| b.is_ascii_digit() || b"+-.eE".contains(b)) {
+        format!("expected a number of at most {MAX_TOKEN} characters, found a longer one: {found}")
+    } else if long.iter().all(u8::is_ascii_graphic) {
+        format!("expected a keyword or a number, found a word of more than {MAX_TOKEN} characters: {found}")
+    } else {
+        format!("expected a keyword or a number, found {found} (binary data in a text file?)")
+    }
 }
 
 #[cfg(test)]

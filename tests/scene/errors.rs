@@ -313,6 +313,36 @@ fn binary_garbage() {
     assert!(e.message.contains("unknown keyword"), "{e}");
 }
 
+/// Issue 34, case 15: a number of 100,000 digits is a number too long, not binary data; a word of
+/// 2,000 letters is a word too long; only bytes that are not printable say "binary data".
+#[test]
+fn overlong_words_say_what_they_are() {
+    let digits = "1".repeat(100_000);
+    let e = fails(
+        &after_camera(&format!("s 0 0 0 {digits}\n")),
+        8,
+        "expected a number of at most 1024 characters, found a longer one: \"1111",
+    );
+    assert!(!e.message.contains("binary"), "{e}");
+    fails(
+        &after_camera(&format!("s 0 0 0 -0.{digits}e5\n")),
+        8,
+        "expected a number of at most 1024 characters",
+    );
+    let word = "x".repeat(2_000);
+    fails(
+        &after_camera(&format!("{word}\n")),
+        8,
+        "found a word of more than 1024 characters: \"xxx",
+    );
+    let junk: String = std::iter::repeat_n("\u{1}a", 1_000).collect();
+    fails(
+        &after_camera(&format!("{junk}\n")),
+        8,
+        "(binary data in a text file?)",
+    );
+}
+
 #[test]
 fn missing_files() {
     let e = scene::load(Path::new("no/such/scene.p3f")).unwrap_err();
