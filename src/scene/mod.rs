@@ -1,6 +1,7 @@
 //! Scenes: the file formats and the structure-of-arrays store they fill.
 
 mod fingerprint;
+mod finite;
 pub mod lex;
 pub mod obj;
 pub mod p3f;
@@ -14,6 +15,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
+pub use finite::Counts;
 pub use store::*;
 
 use crate::error::{Error, Result};
@@ -111,7 +113,17 @@ pub fn load(path: &Path) -> Result<Scene> {
         Some(Format::Scene) => p3f::load(path),
         Some(Format::Ply | Format::Obj) => {
             let mesh = load_mesh(path)?;
-            Ok(p3f::scene_around_mesh(&mesh))
+            let scene = p3f::scene_around_mesh(&mesh);
+            match scene.overflow_since(Counts::default()) {
+                Some(what) => Err(Error::file(
+                    path,
+                    format!(
+                        "a {what} reaches past the largest finite coordinate, {:e}",
+                        f32::MAX
+                    ),
+                )),
+                None => Ok(scene),
+            }
         }
         None => Err(Error::file(
             path,

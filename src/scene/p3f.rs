@@ -111,7 +111,24 @@ impl Parser {
         Ok(())
     }
 
+    /// One statement; what it added must lie within the range of `f32` ([`Scene::overflow_since`]).
     fn statement(&mut self, tok: Tok) -> Result<()> {
+        let before = self.scene.counts();
+        self.statement_body(tok)?;
+        match self.scene.overflow_since(before) {
+            Some(what) => Err(self.lx.error_at(
+                &tok,
+                format!(
+                    "the {what} reaches past the largest finite coordinate, {:e}: expected a size, \
+                     position, scale or translation that keeps it within range",
+                    f32::MAX
+                ),
+            )),
+            None => Ok(()),
+        }
+    }
+
+    fn statement_body(&mut self, tok: Tok) -> Result<()> {
         match self.lx.text(&tok) {
             b"v" => self.view(tok),
             b"b" | b"bclr" => {

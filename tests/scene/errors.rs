@@ -375,6 +375,54 @@ fn missing_include() {
     assert_eq!(e.line(), Some(8));
 }
 
+/// Issue 34, case 13: geometry that a transform or a size takes past the largest float is an error at
+/// its statement (the include's scale and translation loaded with vertices at infinity, exit 0), as
+/// infinite numbers in the file are; so is a bare mesh whose edges overflow.
+#[test]
+fn geometry_reaching_past_the_largest_float_is_refused() {
+    let past = "reaches past the largest finite coordinate, 3.4028235e38";
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("m.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let path = dir.path().join("s.p3f");
+    std::fs::write(
+        &path,
+        after_camera("include m.obj scale 3e38 translate 3.4e38 0 0\n"),
+    )
+    .unwrap();
+    let e = scene::load(&path).unwrap_err();
+    assert_eq!(e.line(), Some(8), "{e}");
+    assert!(e.message.starts_with(&format!("the triangle {past}")), "{e}");
+    std::fs::write(
+        &path,
+        after_camera("include m.obj scale 1e30 translate 3e38 0 0\n"),
+    )
+    .unwrap();
+    scene::load(&path).unwrap();
+    fails(
+        &after_camera("s 3.4e38 0 0 3.4e38\n"),
+        8,
+        &format!("the sphere {past}"),
+    );
+    fails(
+        &after_camera("s 0 0 0 1\nc\n0 0 0 1\n3.4e38 0 0 3e38\n"),
+        9,
+        &format!("the cone {past}"),
+    );
+    fails(
+        &after_camera("p 3\n-3e38 0 0\n3e38 0 0\n0 1 0\n"),
+        8,
+        &format!("the triangle {past}"),
+    );
+    parse(&after_camera(
+        "s 3e38 0 0 4e37\np 3\n-1e38 0 0\n1e38 0 0\n0 1 0\n",
+    ))
+    .unwrap();
+    let ply = dir.path().join("wide.obj");
+    std::fs::write(&ply, "v -3e38 0 0\nv 3e38 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let e = scene::load(&ply).unwrap_err();
+    assert_eq!(e.to_string(), format!("{}: a triangle {past}", ply.display()));
+}
+
 #[test]
 fn include_transforms_and_errors_inside_the_mesh() {
     let dir = tempfile::tempdir().unwrap();
