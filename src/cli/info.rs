@@ -111,7 +111,7 @@ fn vec3(v: Vec3) -> String {
 }
 
 /// One JSON object with the text's fields, in its order. Bounds are null for a scene with nothing
-/// bounded, and any number that is not finite (a bound that overflowed) is null.
+/// bounded (planes alone).
 fn json(path: &Path, scene: &Scene, load_s: f64) -> Map<String, Value> {
     let mut out = Map::new();
     out.insert("scene".into(), path.display().to_string().into());
