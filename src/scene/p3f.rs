@@ -145,8 +145,8 @@ impl Parser {
             b"lq" => self.quad_light(),
             b"f" => self.material(tok),
             b"s" => self.sphere(),
-            b"p" => self.polygon(false),
-            b"pp" => self.polygon(true),
+            b"p" => self.polygon(tok, false),
+            b"pp" => self.polygon(tok, true),
             b"c" => self.cone(tok),
             b"box" => self.cuboid(tok),
             b"pl" => self.plane(tok),
@@ -414,8 +414,8 @@ impl Parser {
         Ok(n as usize)
     }
 
-    /// `p N` (flat) or `pp N` (with per-vertex normals), triangulated by ear clipping.
-    fn polygon(&mut self, smooth: bool) -> Result<()> {
+    /// `p N` (flat) or `pp N` (with per-vertex normals; `p` is the keyword), triangulated by ear clipping.
+    fn polygon(&mut self, p: Tok, smooth: bool) -> Result<()> {
         let n = self.count("the polygon's vertex count", 3)?;
         self.points.clear();
         self.normals.clear();
@@ -440,7 +440,16 @@ impl Parser {
             }
         }
         self.tris.clear();
-        triangulate(&self.points, &mut self.tris);
+        if !triangulate(&self.points, &mut self.tris).exact {
+            self.scene.warnings.push(format!(
+                "{}:{}:{}: polygon of {n} vertices intersects itself or is degenerate: its {} triangles may \
+                 overlap or stick out of it",
+                self.lx.path().display(),
+                p.line,
+                p.col,
+                self.tris.len()
+            ));
+        }
         let m = self.current_material();
         for t in &self.tris {
             let [a, b, c] = t.map(|i| self.points[i as usize]);

@@ -36,7 +36,7 @@ pub fn assert_quad_split(tris: &[[u32; 3]], corners: [u32; 4]) {
 }
 
 /// The signed area of the polygon `p` (counter-clockwise positive), by the shoelace formula.
-fn shoelace(p: &[[f64; 2]]) -> f64 {
+pub fn shoelace(p: &[[f64; 2]]) -> f64 {
     let n = p.len();
     let twice: f64 = (0..n)
         .map(|i| {
@@ -80,5 +80,56 @@ pub fn assert_triangulates(positions: &[Vec3], corners: &[u32], tris: &[[u32; 3]
     assert_eq!(
         sum, whole,
         "{tris:?}: the triangles' areas sum to {sum}, the polygon's is {whole}"
+    );
+}
+
+/// Whether the point `q` is inside the polygon `p` (even-odd rule, by counting the edges that a ray
+/// towards +x crosses).
+pub fn contains(p: &[[f64; 2]], q: [f64; 2]) -> bool {
+    let n = p.len();
+    let mut inside = false;
+    for i in 0..n {
+        let (a, b) = (p[i], p[(i + 1) % n]);
+        if (a[1] > q[1]) != (b[1] > q[1]) {
+            let x = a[0] + (q[1] - a[1]) / (b[1] - a[1]) * (b[0] - a[0]);
+            if q[0] < x {
+                inside = !inside;
+            }
+        }
+    }
+    inside
+}
+
+/// Asserts that `tris` triangulate the simple polygon `p` (corners 0..n in order): n − 2 triangles of
+/// corners in range, each wound as the polygon (a signed area of its sign, not zero), their areas summing
+/// to the shoelace area of the polygon within a relative `1e-9` (so none overlaps another), and the
+/// centroid of every `stride`-th triangle inside the polygon (so none lies outside it).
+#[track_caller]
+pub fn assert_triangulates_simple(p: &[[f64; 2]], tris: &[[u32; 3]], stride: usize) {
+    let whole = shoelace(p);
+    assert_ne!(whole, 0.0, "the test polygon has an area");
+    assert_eq!(tris.len(), p.len() - 2, "n - 2 triangles");
+    let mut sum = 0.0;
+    for (k, t) in tris.iter().enumerate() {
+        assert!(
+            t.iter().all(|&i| (i as usize) < p.len()),
+            "{t:?}: an index outside the polygon of {} corners",
+            p.len()
+        );
+        let corners = t.map(|i| p[i as usize]);
+        let a = shoelace(&corners);
+        assert!(
+            a * whole > 0.0,
+            "{t:?} is not wound as the polygon: signed area {a}, the polygon's {whole}"
+        );
+        sum += a.abs();
+        if k % stride == 0 {
+            let centroid = [0, 1].map(|axis| corners.iter().map(|c| c[axis]).sum::<f64>() / 3.0);
+            assert!(contains(p, centroid), "{t:?} lies outside the polygon");
+        }
+    }
+    assert!(
+        (sum - whole.abs()).abs() <= 1e-9 * whole.abs(),
+        "the triangles' unsigned areas sum to {sum}, the polygon's area is {whole}"
     );
 }
