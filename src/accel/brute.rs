@@ -1,5 +1,6 @@
 //! Brute force: every primitive for every ray. The reference every other accelerator is tested against.
 
+use super::counters;
 use super::policy::HitPolicy;
 use super::prims::{Hit, Prims};
 use super::structure::Structure;
@@ -25,6 +26,8 @@ impl<'a> Brute<'a> {
     /// The one traversal: all ids, planes included; `hit.t` is the upper limit and shrinks on each hit.
     #[inline]
     pub fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        // One node of all the primitives.
+        counters::node::<P>();
         self.prims
             .intersect_each::<P>(0..self.prims.total(), ray, t_min, hit)
     }

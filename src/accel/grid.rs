@@ -10,6 +10,7 @@ use std::fmt;
 
 use glam::Vec3;
 
+use super::counters;
 use super::policy::HitPolicy;
 use super::prims::{Hit, Prims};
 use super::structure::Structure;
@@ -384,6 +385,8 @@ impl<'a> Grid<'a> {
                 2
             };
             let cell_exit = t_next[axis];
+            // A cell walked is a node visited; a primitive the mailbox skips is not tested.
+            counters::node::<P>();
             let run = self.cell_start[index] as usize..self.cell_start[index + 1] as usize;
             for &id in &self.refs[run] {
                 let slot = &mut mailbox[id as usize & (MAILBOX - 1)];
@@ -391,6 +394,7 @@ impl<'a> Grid<'a> {
                     continue;
                 }
                 *slot = id;
+                counters::prims::<P>(1);
                 if self.test(id, ray, t_min, hit, &mut found) && P::ANY {
                     return true;
                 }

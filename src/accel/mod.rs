@@ -8,6 +8,7 @@
 
 pub mod brute;
 pub mod bvh2;
+pub mod counters;
 #[cfg(feature = "embree")]
 pub mod embree;
 pub mod grid;
@@ -19,6 +20,7 @@ pub mod stack;
 pub mod structure;
 pub mod wide;
 
+use std::marker::PhantomData;
 use std::str::FromStr;
 
 pub use packet::{HitPacket, PACKET, RayPacket};
@@ -30,7 +32,7 @@ use crate::geometry::ray::{Ray, ahead};
 use brute::Brute;
 use bvh2::{Builder, Bvh2};
 use grid::Grid;
-use policy::{AnyHit, Closest};
+use policy::{AnyHit, Closest, Counted, HitPolicy};
 use wide::{Bvh4, Bvh8};
 
 /// Which structure to build.
@@ -215,19 +217,119 @@ impl<'a> Accel<'a> {
         each!(self, s => Structure::set_simd(s, simd))
     }
 
+    /// The verbs of `T`: [`Accel::counting`]'s, or the plain ones.
+    pub fn verbs<T: Tally>(&self) -> Verbs<'_, 'a, T> {
+        Verbs::new(self)
+    }
+
+    /// The verbs that count their steps into [`counters`] (per ray of each call; the renderer's
+    /// `--stats` and heatmaps), where the structure can count them ([`Accel::counts_steps`]).
+    pub fn counting(&self) -> Verbs<'_, 'a, Counting> {
+        Verbs::new(self)
+    }
+
+    /// Whether the counting verbs count: Embree's kernels are not ours to count.
+    pub fn counts_steps(&self) -> bool {
+        each!(self, s => Structure::counts_steps(s))
+    }
+
+    /// Finds the closest hit with `t` in `(t_min, hit.t)`; updates `hit` and returns true if there is one
+    /// ([`Verbs::intersect`]).
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        Verbs::<Plain>::new(self).intersect(ray, t_min, hit)
+    }
+
+    /// True if anything is hit with `t` in `(t_min, t_max)` ([`Verbs::occluded`]).
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        Verbs::<Plain>::new(self).occluded(ray, t_min, t_max)
+    }
+
+    /// The closest hits of a packet's active rays ([`Verbs::intersect_packet`]).
+    #[inline]
+    pub fn intersect_packet(&self, rays: &RayPacket, active: u8, t_min: f32, hits: &mut HitPacket) -> u8 {
+        Verbs::<Plain>::new(self).intersect_packet(rays, active, t_min, hits)
+    }
+
+    /// Which of a packet's active rays are blocked ([`Verbs::occluded_packet`]).
+    #[inline]
+    pub fn occluded_packet(&self, rays: &RayPacket, active: u8, t_min: f32, t_max: &[f32; PACKET]) -> u8 {
+        Verbs::<Plain>::new(self).occluded_packet(rays, active, t_min, t_max)
+    }
+
+    /// The closest hit of each ray of a stream ([`Verbs::intersect_stream`]).
+    pub fn intersect_stream(&self, rays: &[Ray], t_min: f32, hits: &mut [Hit]) {
+        Verbs::<Plain>::new(self).intersect_stream(rays, t_min, hits)
+    }
+
+    /// Whether each ray of a stream is blocked ([`Verbs::occluded_stream`]).
+    pub fn occluded_stream(&self, rays: &[Ray], t_min: f32, t_max: &[f32], occluded: &mut [bool]) {
+        Verbs::<Plain>::new(self).occluded_stream(rays, t_min, t_max, occluded)
+    }
+}
+
+/// Whether an accelerator's verbs count their steps: the hit policies they trace with.
+pub trait Tally {
+    /// The closest-hit policy.
+    type Closest: HitPolicy;
+    /// The any-hit policy.
+    type Any: HitPolicy;
+}
+
+/// The verbs as they are: nothing counted, nothing spent on counting.
+pub enum Plain {}
+
+impl Tally for Plain {
+    type Closest = Closest;
+    type Any = AnyHit;
+}
+
+/// The verbs counting their steps into [`counters`], one lane per ray of the call.
+pub enum Counting {}
+
+impl Tally for Counting {
+    type Closest = Counted<Closest>;
+    type Any = Counted<AnyHit>;
+}
+
+/// An accelerator's six verbs, written once for both [`Tally`]s.
+pub struct Verbs<'r, 'a, T> {
+    accel: &'r Accel<'a>,
+    tally: PhantomData<T>,
+}
+
+impl<'r, 'a, T: Tally> Verbs<'r, 'a, T> {
+    fn new(accel: &'r Accel<'a>) -> Self {
+        Verbs {
+            accel,
+            tally: PhantomData,
+        }
+    }
+
+    /// Zeroes the lanes of the `n` rays of a counted call.
+    #[inline(always)]
+    fn lanes(n: usize) {
+        if T::Closest::COUNT {
+            counters::reset(n);
+        }
+    }
+
     /// Finds the closest hit with `t` in `(t_min, hit.t)`; updates `hit` and returns true if there is one.
     /// Every query of every accelerator searches ahead of the ray's origin: a negative `t_min` is 0.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        Self::lanes(1);
         let t_min = ahead(t_min);
-        each!(self, s => Structure::traverse::<Closest>(s, ray, t_min, hit))
+        each!(self.accel, s => Structure::traverse::<T::Closest>(s, ray, t_min, hit))
     }
 
     /// True if anything is hit with `t` in `(t_min, t_max)`.
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
+        Self::lanes(1);
         let (t_min, mut hit) = (ahead(t_min), Hit::miss(t_max));
-        each!(self, s => Structure::traverse::<AnyHit>(s, ray, t_min, &mut hit))
+        each!(self.accel, s => Structure::traverse::<T::Any>(s, ray, t_min, &mut hit))
     }
 
     /// The closest hits of the rays of `rays` whose bit is set in `active`, each with `t` in
@@ -237,16 +339,18 @@ impl<'a> Accel<'a> {
     /// structures answer ray by ray.
     #[inline]
     pub fn intersect_packet(&self, rays: &RayPacket, active: u8, t_min: f32, hits: &mut HitPacket) -> u8 {
+        Self::lanes(PACKET);
         let t_min = ahead(t_min);
-        each!(self, s => Structure::traverse_packet::<Closest>(s, rays, active, t_min, hits))
+        each!(self.accel, s => Structure::traverse_packet::<T::Closest>(s, rays, active, t_min, hits))
     }
 
     /// The mask of the rays of `rays` in `active` that hit anything with `t` in `(t_min, t_max[k])`:
     /// [`Accel::occluded`] for each, as a packet where the structure has a packet kernel.
     #[inline]
     pub fn occluded_packet(&self, rays: &RayPacket, active: u8, t_min: f32, t_max: &[f32; PACKET]) -> u8 {
+        Self::lanes(PACKET);
         let (t_min, mut hits) = (ahead(t_min), t_max.map(Hit::miss));
-        each!(self, s => Structure::traverse_packet::<AnyHit>(s, rays, active, t_min, &mut hits))
+        each!(self.accel, s => Structure::traverse_packet::<T::Any>(s, rays, active, t_min, &mut hits))
     }
 
     /// The closest hit of each ray of `rays` with `t` in `(t_min, hits[i].t)`, into `hits[i]` (a miss
@@ -255,10 +359,11 @@ impl<'a> Accel<'a> {
     /// a batch of tiles); the other structures answer ray by ray.
     pub fn intersect_stream(&self, rays: &[Ray], t_min: f32, hits: &mut [Hit]) {
         assert_eq!(rays.len(), hits.len(), "a hit per ray");
+        Self::lanes(rays.len());
         let t_min = ahead(t_min);
         with_spare(
             rays.len(),
-            |_, found| each!(self, s => Structure::traverse_stream::<Closest>(s, rays, t_min, hits, found)),
+            |_, found| each!(self.accel, s => Structure::traverse_stream::<T::Closest>(s, rays, t_min, hits, found)),
         )
     }
 
@@ -269,10 +374,11 @@ impl<'a> Accel<'a> {
             t_max.len() == rays.len() && occluded.len() == rays.len(),
             "a distance and a flag per ray"
         );
+        Self::lanes(rays.len());
         let t_min = ahead(t_min);
         with_spare(rays.len(), |hits, _| {
             hits.iter_mut().zip(t_max).for_each(|(h, &t)| *h = Hit::miss(t));
-            each!(self, s => Structure::traverse_stream::<AnyHit>(s, rays, t_min, hits, occluded))
+            each!(self.accel, s => Structure::traverse_stream::<T::Any>(s, rays, t_min, hits, occluded))
         })
     }
 }

@@ -3,6 +3,8 @@
 //! (bit `k` for ray `k`); every accelerator answers it, the wide BVHs with their packet kernel and the
 //! others ray by ray, with the answers each ray would get alone.
 
+use super::counters;
+use super::policy::HitPolicy;
 use super::prims::Hit;
 use crate::geometry::ray::Ray;
 
@@ -36,6 +38,9 @@ pub fn first(n: usize) -> u8 {
 
 /// The mask of the rays in `active` for which `answer` is true: a packet answered ray by ray.
 #[inline]
-pub(super) fn ray_by_ray(active: u8, mut answer: impl FnMut(usize) -> bool) -> u8 {
-    bits(active).fold(0, |m, k| if answer(k) { m | 1 << k } else { m })
+pub(super) fn ray_by_ray<P: HitPolicy>(active: u8, mut answer: impl FnMut(usize) -> bool) -> u8 {
+    bits(active).fold(0, |m, k| {
+        counters::at::<P>(k);
+        if answer(k) { m | 1 << k } else { m }
+    })
 }

@@ -6,6 +6,7 @@
 
 use glam::Vec3;
 
+use super::counters;
 use super::policy::HitPolicy;
 use crate::geometry::{aabb::Aabb, cone, cuboid, plane, ray::Ray, sphere, triangle};
 use crate::scene::{MaterialId, NO_NORMALS, Scene};
@@ -221,6 +222,7 @@ impl<'a> Prims<'a> {
     ) -> bool {
         let mut found = false;
         for id in ids {
+            counters::prims::<P>(1);
             if let Some((t, u, v)) = self.intersect(id, ray, t_min, hit.t) {
                 *hit = Hit { t, prim: id, u, v };
                 found = true;

@@ -2,6 +2,7 @@
 //! dispatches each verb in one place and a new structure is one implementation. The packet and
 //! stream verbs default to ray by ray; the wide BVHs (and Embree) override them with their kernels.
 
+use super::counters;
 use super::packet::{HitPacket, RayPacket, ray_by_ray};
 use super::policy::HitPolicy;
 use super::prims::{Hit, Prims};
@@ -27,6 +28,11 @@ pub trait Structure<'a> {
         None
     }
 
+    /// Whether its kernels count their steps under a counted policy ([`super::counters`]).
+    fn counts_steps(&self) -> bool {
+        true
+    }
+
     /// Makes the kernels use `simd`; false, with nothing changed, when the CPU lacks it or the
     /// structure has no such choice.
     fn set_simd(&mut self, _simd: Isa) -> bool {
@@ -46,12 +52,13 @@ pub trait Structure<'a> {
         t_min: f32,
         hits: &mut HitPacket,
     ) -> u8 {
-        ray_by_ray(active, |k| self.traverse::<P>(&rays[k], t_min, &mut hits[k]))
+        ray_by_ray::<P>(active, |k| self.traverse::<P>(&rays[k], t_min, &mut hits[k]))
     }
 
     /// [`Structure::traverse`] for each ray of `rays`: `hits[i]` and `found[i]` are ray `i`'s.
     fn traverse_stream<P: HitPolicy>(&self, rays: &[Ray], t_min: f32, hits: &mut [Hit], found: &mut [bool]) {
-        for ((ray, hit), found) in rays.iter().zip(hits).zip(found) {
+        for (i, ((ray, hit), found)) in rays.iter().zip(hits).zip(found).enumerate() {
+            counters::at::<P>(i);
             *found = self.traverse::<P>(ray, t_min, hit);
         }
     }

@@ -125,13 +125,15 @@ pub fn build_options(build: BuildKind, bins: usize) -> BuildOptions {
 }
 
 /// The options rendered, checked: `options`, or with `spd` the SPD test procedure's ([`spd::options`]:
-/// 513 x 513 corner rays, spp 0, 4 bounces) keeping what it leaves open (kernel, seed, roughness).
+/// 513 x 513 corner rays, spp 0, 4 bounces) keeping what it leaves open (kernel, seed, roughness,
+/// counting).
 pub fn checked(spd: bool, options: Options, scene: &Scene) -> whitted::Result<Options> {
     let options = if spd {
         Options {
             kernel: options.kernel,
             seed: options.seed,
             roughness: options.roughness,
+            count_steps: options.count_steps,
             ..spd::options(scene)
         }
     } else {

@@ -5,6 +5,7 @@ use std::path::Path;
 use std::time::Duration;
 
 use serde_json::{Map, Value, json};
+use whitted::accel::counters::Steps;
 use whitted::accel::{Accel, Isa};
 use whitted::render::spd::{self, Counts};
 use whitted::render::{Options, RayCounts};
@@ -125,10 +126,22 @@ impl Report {
         };
         out += &format!("time       load {load:.3} s, build {build:.3} s, {what} {render:.3} s{passes}\n");
         let rays = if self.per_frame { "rays a frame" } else { "rays" };
-        out += &format!("{rays:<13}{:>12} {:>10}\n", "count", "Mrays/s");
+        let counted = self.options.count_steps;
+        let steps = if counted {
+            format!(" {:>10} {:>10}", "nodes/ray", "prims/ray")
+        } else {
+            String::new()
+        };
+        out += &format!("{rays:<13}{:>12} {:>10}{steps}\n", "count", "Mrays/s");
         let r = &self.rays;
-        for (kind, count) in by_kind(r) {
-            out += &format!("  {kind:<11}{count:>12} {:>10.2}\n", self.mrays(count));
+        for ((kind, count), (_, s)) in by_kind(r).zip(steps_by_kind(r)) {
+            let steps = if counted {
+                let (nodes, prims) = per_ray(s, count);
+                format!(" {nodes:>10.2} {prims:>10.2}")
+            } else {
+                String::new()
+            };
+            out += &format!("  {kind:<11}{count:>12} {:>10.2}{steps}\n", self.mrays(count));
             if kind == "primary" {
                 out += &format!("    hits     {:>12}\n", r.primary_hits);
             }
@@ -172,11 +185,40 @@ impl Report {
         out.insert(rays_key(self.per_frame).into(), rays.into());
         out.insert("mrays_per_s".into(), self.mrays(r.total()).into());
         out.insert("mrays_per_s_by_kind".into(), rates.into());
+        if self.options.count_steps {
+            let steps: Map<String, Value> = by_kind(r)
+                .zip(steps_by_kind(r))
+                .map(|((k, n), (_, s))| {
+                    let (nodes, prims) = per_ray(s, n);
+                    (k.into(), json!({"nodes": nodes, "prims": prims}))
+                })
+                .collect();
+            out.insert("steps_per_ray".into(), steps.into());
+        }
         if let Some((ours, readme)) = self.spd() {
             out.insert("spd".into(), spd_json(&ours, readme.as_ref()));
         }
         out
     }
+}
+
+/// The steps of each kind of [`by_kind`], in its order.
+fn steps_by_kind(r: &RayCounts) -> impl Iterator<Item = (&'static str, Steps)> {
+    let s = &r.steps;
+    [
+        ("primary", s.camera),
+        ("shadow", s.shadow),
+        ("reflected", s.reflected),
+        ("refracted", s.refracted),
+        ("total", s.total()),
+    ]
+    .into_iter()
+}
+
+/// Mean nodes visited and primitives tested per ray of `rays` rays (0 without rays).
+fn per_ray(s: Steps, rays: u64) -> (f64, f64) {
+    let n = rays.max(1) as f64;
+    (s.nodes as f64 / n, s.prims as f64 / n)
 }
 
 /// The image size of a frame rendered with `options` (an SPD frame's corners are one more a side).
@@ -309,6 +351,7 @@ mod tests {
             seed: 0,
             roughness: 0.0,
             spd,
+            count_steps: false,
         };
         let rays = RayCounts {
             primary: 1000,
@@ -316,6 +359,7 @@ mod tests {
             shadow: 2000,
             reflected: 300,
             refracted: 200,
+            steps: Default::default(),
         };
         Report {
             scene: "scenes/spd/tetra_x.nff".into(),

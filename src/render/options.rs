@@ -97,6 +97,9 @@ pub struct Options {
     /// (`width` − 1) × (`height` − 1) image ([`super::spd::corners_to_pixels`] averages them into it),
     /// and a total internal reflection spawns its mirror ray whatever the material's `Ks`. Needs spp 0.
     pub spd: bool,
+    /// Count each ray's steps (nodes visited, primitives tested) into [`super::whitted::RayCounts::steps`],
+    /// through the accelerator's counting verbs ([`crate::accel::Accel::counting`]).
+    pub count_steps: bool,
 }
 
 impl Options {
@@ -122,6 +125,7 @@ impl Options {
             seed: 0,
             roughness: 0.0,
             spd: false,
+            count_steps: false,
         }
     }
 

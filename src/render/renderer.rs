@@ -14,7 +14,7 @@ use super::camera::RayCamera;
 use super::env::Background;
 use super::options::Options;
 use super::sampler::{PixelPattern, Sampler};
-use super::whitted::{PixelSample, RayCounts, Whitted};
+use super::whitted::{PixelSample, RayCounts, RayKind, Whitted};
 use crate::accel::Accel;
 use crate::geometry::ray::Ray;
 use crate::scene::{Camera, Scene};
@@ -77,6 +77,11 @@ impl<'a> Renderer<'a> {
             options.roughness,
             options.spd,
         );
+        let whitted = if options.count_steps {
+            whitted.counting()
+        } else {
+            whitted
+        };
         Renderer {
             whitted,
             // At spp 0 the camera rays go through the pixel centres from the eye (a pinhole).
@@ -165,7 +170,11 @@ impl<'a> Renderer<'a> {
     /// What `ray` sees from the eye (depth 0), with the first sample's light points and random numbers
     /// of pixel 0: for probing the shading with rays of one's own.
     pub fn radiance(&self, ray: &Ray) -> Vec3 {
-        self.whitted
-            .trace(ray, 0, &mut self.pixel_sample(1, 0, 0, Vec2::splat(0.5)))
+        self.whitted.trace(
+            ray,
+            0,
+            RayKind::Camera,
+            &mut self.pixel_sample(1, 0, 0, Vec2::splat(0.5)),
+        )
     }
 }

@@ -17,6 +17,7 @@ use super::light::{self, LightSample, Lights};
 use super::optics::{beer, reflect, refract, schlick};
 use super::options::MAX_DEPTH;
 use super::sampler::Sampler;
+use crate::accel::counters::{self, Steps};
 use crate::accel::{Accel, Hit, Prims, Surface};
 use crate::geometry::ray::Ray;
 use crate::scene::{Material, QuadLight, Scene};
@@ -78,6 +79,78 @@ pub struct RayCounts {
     pub reflected: u64,
     /// Refracted rays.
     pub refracted: u64,
+    /// The steps of the rays of each kind, when the render counts them ([`Options::count_steps`]).
+    ///
+    /// [`Options::count_steps`]: super::options::Options::count_steps
+    pub steps: KindSteps,
+}
+
+/// Which kind a traced ray is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayKind {
+    /// From the camera.
+    Camera,
+    /// Toward a light sample (any hit).
+    Shadow,
+    /// Off a mirror.
+    Reflected,
+    /// Through a transmitter.
+    Refracted,
+}
+
+impl RayKind {
+    /// The kind of a hit's secondary ray `i`: 0 refracted, 1 reflected (the order of
+    /// [`Whitted::shade_surface`]'s rays).
+    pub fn secondary(i: usize) -> RayKind {
+        if i == 0 {
+            RayKind::Refracted
+        } else {
+            RayKind::Reflected
+        }
+    }
+}
+
+/// Steps ([`Steps`]: nodes visited, primitives tested) summed over the rays of each kind.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct KindSteps {
+    /// Camera rays'.
+    pub camera: Steps,
+    /// Shadow rays'.
+    pub shadow: Steps,
+    /// Mirror rays'.
+    pub reflected: Steps,
+    /// Refracted rays'.
+    pub refracted: Steps,
+}
+
+impl KindSteps {
+    /// The steps of `kind`.
+    pub fn of(&mut self, kind: RayKind) -> &mut Steps {
+        match kind {
+            RayKind::Camera => &mut self.camera,
+            RayKind::Shadow => &mut self.shadow,
+            RayKind::Reflected => &mut self.reflected,
+            RayKind::Refracted => &mut self.refracted,
+        }
+    }
+
+    /// All kinds' steps.
+    pub fn total(&self) -> Steps {
+        let mut all = self.camera;
+        for s in [self.shadow, self.reflected, self.refracted] {
+            all += s;
+        }
+        all
+    }
+}
+
+impl std::ops::AddAssign for KindSteps {
+    fn add_assign(&mut self, o: KindSteps) {
+        self.camera += o.camera;
+        self.shadow += o.shadow;
+        self.reflected += o.reflected;
+        self.refracted += o.refracted;
+    }
 }
 
 impl RayCounts {
@@ -100,6 +173,7 @@ impl std::ops::AddAssign for RayCounts {
         self.shadow += o.shadow;
         self.reflected += o.reflected;
         self.refracted += o.refracted;
+        self.steps += o.steps;
     }
 }
 
@@ -145,6 +219,8 @@ pub struct Whitted<'a> {
     /// The SPD rules ([`super::spd`]): a hit on a transmitter always spawns its mirror ray (of weight
     /// zero where Ks is 0) and, but for a total internal reflection, its refracted ray.
     spd: bool,
+    /// Count each ray's steps ([`Whitted::counting`]).
+    count: bool,
 }
 
 impl<'a> Whitted<'a> {
@@ -180,6 +256,7 @@ impl<'a> Whitted<'a> {
             // Unvalidated options are clamped rather than allowed to overflow the stack.
             max_depth: max_depth.min(MAX_DEPTH),
             spd,
+            count: false,
         }
     }
 
@@ -197,11 +274,38 @@ impl<'a> Whitted<'a> {
         Lights::new(&self.fixed_lights, self.quads, uv)
     }
 
-    /// The colour seen along `ray` (unit direction) after `depth` bounces.
-    pub fn trace(&self, ray: &Ray, depth: u32, sample: &mut PixelSample) -> Vec3 {
+    /// The integrator counting each ray's steps into its sample's [`RayCounts::steps`], where the
+    /// accelerator counts them ([`Accel::counts_steps`]).
+    pub fn counting(mut self) -> Self {
+        self.count = self.accel.counts_steps();
+        self
+    }
+
+    /// Whether the integrator counts steps.
+    pub fn counts(&self) -> bool {
+        self.count
+    }
+
+    /// The colour seen along `ray` (unit direction), a ray of `kind`, after `depth` bounces.
+    pub fn trace(&self, ray: &Ray, depth: u32, kind: RayKind, sample: &mut PixelSample) -> Vec3 {
         let mut hit = Hit::miss(f32::INFINITY);
-        self.accel.intersect(ray, 0.0, &mut hit);
+        if self.count {
+            self.accel.counting().intersect(ray, 0.0, &mut hit);
+            *sample.rays.steps.of(kind) += counters::lane(0);
+        } else {
+            self.accel.intersect(ray, 0.0, &mut hit);
+        }
         self.shade(ray, &hit, depth, sample)
+    }
+
+    /// Whether `shadow` is blocked, its steps added to `steps` when counting.
+    pub(super) fn blocked(&self, shadow: &ShadowRay, steps: &mut Steps) -> bool {
+        if !self.count {
+            return self.accel.occluded(&shadow.ray, 0.0, shadow.distance);
+        }
+        let blocked = self.accel.counting().occluded(&shadow.ray, 0.0, shadow.distance);
+        *steps += counters::lane(0);
+        blocked
     }
 
     /// The colour of `ray` given its closest hit: the background for a miss, else
@@ -215,7 +319,7 @@ impl<'a> Whitted<'a> {
         let bounces = self.bounces(ray, &surface, depth, sample);
         sample.rays.add_bounces(&bounces);
         let lights = sample.lights;
-        let mut shadows = 0;
+        let (mut shadows, mut steps) = (0, Steps::default());
         let color = self.shade_surface(
             ray,
             &surface,
@@ -223,11 +327,12 @@ impl<'a> Whitted<'a> {
             &lights,
             &mut |_, shadow| {
                 shadows += 1;
-                self.accel.occluded(&shadow.ray, 0.0, shadow.distance)
+                self.blocked(shadow, &mut steps)
             },
-            &mut |_, r| self.trace(r, depth + 1, sample),
+            &mut |i, r| self.trace(r, depth + 1, RayKind::secondary(i), sample),
         );
         sample.rays.shadow += shadows;
+        sample.rays.steps.shadow += steps;
         color
     }
 

@@ -8,3 +8,4 @@ mod common;
 
 mod accel_props;
 mod accel_vs_brute;
+mod counters;

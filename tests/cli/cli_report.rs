@@ -633,3 +633,72 @@ fn spd_refuses_the_options_that_change_its_frame() {
         );
     }
 }
+
+/// `--counters`: `render --stats --counters` and `bench --counters` add each ray kind's mean nodes
+/// visited and primitives tested per ray; brute force's are one node and every primitive per camera
+/// ray (the default scene's primitives, counted by `info`). Without --stats,
+/// render refuses it (usage error).
+#[test]
+fn counters_report_the_steps_per_ray_by_kind() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c.png");
+    let v = json(&[
+        "render",
+        "--width",
+        "32",
+        "--accel",
+        "none",
+        "--stats=json",
+        "--counters",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let info = json(&["info", "--json", "scenes/default.p3f"]);
+    let prims = ["spheres", "triangles", "boxes", "planes", "cones"]
+        .iter()
+        .map(|k| info[*k].as_u64().unwrap_or(0))
+        .sum::<u64>();
+    let primary = &v["steps_per_ray"]["primary"];
+    assert_eq!(primary["nodes"].as_f64(), Some(1.0), "{v}");
+    assert_eq!(primary["prims"].as_f64(), Some(prims as f64), "{v}");
+    let kinds: Vec<&String> = v["steps_per_ray"].as_object().unwrap().keys().collect();
+    assert_eq!(kinds, ["primary", "shadow", "reflected", "refracted", "total"]);
+    let plain = json(&[
+        "render",
+        "--width",
+        "32",
+        "--stats=json",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(plain.get("steps_per_ray").is_none(), "{plain}");
+    let b = json(&[
+        "bench",
+        "scenes/spd/tetra_default.nff",
+        "--frames",
+        "1",
+        "--counters",
+        "--json",
+    ]);
+    assert!(
+        b["steps_per_ray"]["primary"]["nodes"].as_f64().unwrap() > 1.0,
+        "{b}"
+    );
+    let text = String::from_utf8(
+        whitted(&[
+            "render",
+            "--width",
+            "32",
+            "--stats",
+            "--counters",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .stderr,
+    )
+    .unwrap();
+    assert!(text.contains("count    Mrays/s  nodes/ray  prims/ray"), "{text}");
+    let err =
+        String::from_utf8(whitted(&["render", "--counters", "-o", out.to_str().unwrap()]).stderr).unwrap();
+    assert!(err.contains("--stats"), "{err}");
+}

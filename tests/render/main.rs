@@ -6,6 +6,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod counters;
 mod env;
 mod limits;
 mod mesh_normals;

@@ -6,6 +6,7 @@ mod build;
 
 use std::fmt;
 
+use super::counters;
 use super::policy::HitPolicy;
 use super::prims::{Hit, Prims};
 use super::stack::Stack;
@@ -103,6 +104,7 @@ impl<'a> Bvh2<'a> {
                     }
                 }
             } else {
+                counters::node::<P>();
                 let (a, b) = (
                     &self.nodes[node.first as usize],
                     &self.nodes[node.first as usize + 1],

@@ -163,6 +163,11 @@ impl<'a> Structure<'a> for Embree<'a> {
         true
     }
 
+    /// Embree's traversal is its own: nothing of it is counted.
+    fn counts_steps(&self) -> bool {
+        false
+    }
+
     #[inline]
     fn traverse<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
         if P::ANY {

@@ -38,6 +38,7 @@ use super::lanes::{Lanes8, OnLanes8, Twice};
 use super::order::sort_far_to_near;
 use super::slab::{SlabRays, slab};
 use super::{ChildRef, EMPTY, LEAF, STACK, WideBvh};
+use crate::accel::counters;
 use crate::accel::packet::{HitPacket, PACKET, RayPacket, bits};
 use crate::accel::policy::HitPolicy;
 use crate::accel::stack::Stack;
@@ -113,6 +114,7 @@ impl<P: HitPolicy, const W: usize> OnLanes8 for Packet<'_, '_, P, W> {
         // The planes first, ray by ray, as the single-ray kernel does.
         let mut found = 0u32;
         for k in bits(active) {
+            counters::at::<P>(k);
             if bvh.prims.intersect_planes::<P>(&rays[k], t_min, &mut hits[k]) {
                 found |= 1 << k;
             }
@@ -144,6 +146,7 @@ impl<P: HitPolicy, const W: usize> OnLanes8 for Packet<'_, '_, P, W> {
                 let mut hit = 0;
                 for k in bits(mask as u8) {
                     let mut one = false;
+                    counters::at::<P>(k);
                     bvh.leaf::<P, L>(current, &rays[k], t_min, &mut hits[k], &mut one);
                     hit |= u32::from(one) << k;
                 }
@@ -158,6 +161,8 @@ impl<P: HitPolicy, const W: usize> OnLanes8 for Packet<'_, '_, P, W> {
                     t_hit = limits(hits);
                 }
             } else {
+                // The node's boxes are tested against every ray of the mask.
+                counters::nodes::<P>(mask);
                 let node = &bvh.nodes[current as usize];
                 let t_max = t_hit.mul(margin);
                 let start = stack.len();

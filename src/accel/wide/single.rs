@@ -16,6 +16,7 @@ use super::order::Visit;
 use super::slab::{SlabRays, slab};
 use super::tri4::Tri4;
 use super::{Bvh4, Bvh8, ChildRef, EMPTY, LEAF, STACK, TRIANGLES, WideBvh, leaf_parts};
+use crate::accel::counters;
 use crate::accel::policy::HitPolicy;
 use crate::accel::prims::Hit;
 use crate::accel::stack::Stack;
@@ -81,6 +82,9 @@ impl<const W: usize> WideBvh<'_, W> {
     ) -> bool {
         let (start, count) = leaf_parts(r);
         if r & TRIANGLES != 0 {
+            // The leaf's triangles are counted as tested together (an any-hit ray that stops early
+            // is charged the whole leaf); other kinds count one by one.
+            counters::prims::<P>(count);
             let blocks = &self.tris[start..start + count.div_ceil(4)];
             for group in blocks.chunks(if T::ONE_REGISTER { 2 } else { 1 }) {
                 let lane = match group {
@@ -140,6 +144,7 @@ impl<const W: usize> WideBvh<'_, W> {
                     return true;
                 }
             } else {
+                counters::node::<P>();
                 let node = &self.nodes[current as usize];
                 let plane =
                     |axis: usize, max: bool| L::load(if max { &node.max[axis] } else { &node.min[axis] });

@@ -21,6 +21,7 @@ use super::lanes::{Lanes, Lanes8, OnLanes8};
 use super::order::sort_far_to_near;
 use super::slab::{SlabRay, SlabRays, slab};
 use super::{Bvh4, Bvh8, ChildRef, EMPTY, LEAF, WideBvh};
+use crate::accel::counters;
 use crate::accel::policy::HitPolicy;
 use crate::accel::prims::Hit;
 use crate::geometry::ray::{CULL_MARGIN, Ray, ahead};
@@ -140,6 +141,7 @@ impl<const W: usize> WideBvh<'_, W> {
         entries.clear();
         frames.clear();
         for (i, ray) in rays.iter().enumerate() {
+            counters::at::<P>(i);
             found[i] = self.prims.intersect_planes::<P>(ray, t_min, &mut hits[i]);
             prepared.push(SlabRay::new::<W, L>(ray));
             if !(P::ANY && found[i]) {
@@ -175,10 +177,12 @@ impl<const W: usize> WideBvh<'_, W> {
             if live - start < STREAM_MIN || child & LEAF != 0 {
                 if child & LEAF != 0 {
                     for i in entries.drain(start..).map(|e| e.ray as usize) {
+                        counters::at::<P>(i);
                         self.leaf::<P, T>(child, &rays[i], t_min, &mut hits[i], &mut found[i]);
                     }
                 } else {
                     for i in entries.drain(start..).map(|e| e.ray as usize) {
+                        counters::at::<P>(i);
                         let r = SlabRays::<L>::one(&prepared[i]);
                         self.descend::<P, L, T>(child, &rays[i], &r, t_min, &mut hits[i], &mut found[i]);
                     }
@@ -191,6 +195,8 @@ impl<const W: usize> WideBvh<'_, W> {
             let mut nearest = [f32::INFINITY; W];
             for e in entries.drain(start..) {
                 let i = e.ray as usize;
+                counters::at::<P>(i);
+                counters::node::<P>();
                 let r = SlabRays::<L>::one(&prepared[i]);
                 let (lanes, mut mask) = slab(&r, plane, L::splat(t_min), L::splat(hits[i].t * CULL_MARGIN));
                 let t = lanes.to_array();

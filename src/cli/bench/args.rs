@@ -34,6 +34,10 @@ pub struct BenchArgs {
     /// --accel's), alternating frame by frame with --accel's, and print both and their speed ratio.
     #[arg(long, value_name = "ACCEL")]
     pub compare: Option<AccelKind>,
+    /// Also count the nodes visited and primitives tested by each ray (in the warm-up frame, so that
+    /// the timed frames do not pay for counting) and print their means per ray kind.
+    #[arg(long)]
+    pub counters: bool,
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub json: bool,

@@ -48,6 +48,7 @@ pub fn options(args: &BenchArgs, scene: &Scene) -> whitted::Result<Options> {
     let depth = args.max_depth.unwrap_or(DEFAULT_DEPTH);
     let options = Options {
         spp: args.spp.unwrap_or(scene.spp),
+        count_steps: args.counters,
         ..args.frame.options(scene, depth)
     };
     checked(args.spd, options, scene)

@@ -23,8 +23,9 @@ pub struct Timed<'a> {
 }
 
 /// Times `frames` frames of `scene` with each of `accels` (and the time it took to build) after one
-/// frame of warm-up. With two (--compare) they alternate frame by frame, so that a change in the
-/// machine's load falls on both.
+/// frame of warm-up, which counts the rays' steps if `options` ask for it (the timed frames never
+/// count: counting costs time). With two (--compare) they alternate frame by frame, so that a change
+/// in the machine's load falls on both.
 pub fn time<'a>(
     scene: &'a Scene,
     options: Options,
@@ -37,8 +38,15 @@ pub fn time<'a>(
     let frame = |r: &Renderer| pool.install(|| r.render_pass(1, &|| {}, &never).expect("never stopped"));
     let mut timed: Vec<Timed> = accels
         .map(|(accel, built)| {
-            let renderer = Renderer::new(scene, accel, options);
-            let (_, rays) = frame(&renderer);
+            let (_, rays) = frame(&Renderer::new(scene, accel, options));
+            let renderer = Renderer::new(
+                scene,
+                accel,
+                Options {
+                    count_steps: false,
+                    ..options
+                },
+            );
             Timed {
                 renderer,
                 accel,
@@ -70,9 +78,14 @@ impl Timed<'_> {
     /// The report of the median frame of `scene`, loaded in `loaded`, on `threads` threads.
     pub fn report(&self, scene: &Path, options: &Options, loaded: Duration, threads: usize) -> Report {
         let times = [loaded, self.built, Duration::from_secs_f64(self.median() / 1e3)];
+        // Embree's steps are not counted: no columns of zeros for it.
+        let options = Options {
+            count_steps: options.count_steps && self.accel.counts_steps(),
+            ..*options
+        };
         Report {
             per_frame: true,
-            ..Report::new(Some(scene), options, self.accel, threads, times, self.rays)
+            ..Report::new(Some(scene), &options, self.accel, threads, times, self.rays)
         }
     }
 }

@@ -88,6 +88,10 @@ pub struct ReportArgs {
     /// on stdout. With --spd, also the SPD counts beside the Readme's.
     #[arg(long, value_name = "FORMAT", num_args = 0..=1, require_equals = true, default_missing_value = "text")]
     pub stats: Option<Format>,
+    /// With --stats: also count the nodes visited and primitives tested by each ray, and report their
+    /// means per ray kind (counting makes the render slower; its times are the counted render's).
+    #[arg(long, requires = "stats")]
+    pub counters: bool,
     /// Render with the Standard Procedural Databases' test procedure: a 512x512 image from 513x513
     /// corner rays, spp 0, 4 bounces (refuses --spp, --passes, --tiles, --passes-range, --width,
     /// --height, --max-depth and .partial outputs).

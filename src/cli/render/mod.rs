@@ -42,7 +42,7 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
     check_outputs(args)?;
     let mut scene = load_scene(args.scene.as_deref())?;
     warn(&scene.warnings);
-    let plan = Plan::new(args, &mut scene).map_err(Failure::Usage)?;
+    let mut plan = Plan::new(args, &mut scene).map_err(Failure::Usage)?;
     // A part's sums cover its tiles only; a whole frame is refused here rather than aborted later.
     if plan.tiles.is_none() {
         memory::check(plan.options.width, plan.options.height).map_err(whitted::Error::msg)?;
@@ -52,6 +52,11 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
     let build_start = Instant::now();
     let accel = pool.install(|| Accel::try_build_with(Prims::new(&scene), plan.accel, plan.build))?;
     let built = build_start.elapsed();
+    if plan.options.count_steps && !accel.counts_steps() {
+        plan.warnings
+            .push("Embree's traversal is its own: --counters counts no steps of it".into());
+        plan.options.count_steps = false;
+    }
     warn(&plan.warnings);
     let renderer = Renderer::new(&scene, &accel, plan.options);
     warn(&renderer.warnings);

@@ -81,6 +81,7 @@ impl Plan {
             spp,
             seed: args.seed,
             roughness: args.roughness,
+            count_steps: args.report.counters,
             ..args.frame.options(scene, depth)
         };
         let options = checked(args.report.spd, options, scene)?;

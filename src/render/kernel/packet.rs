@@ -11,13 +11,14 @@
 use glam::{Vec2, Vec3};
 
 use super::{BLOCK_H, BLOCK_W, PerRay, TilePixels, coherent};
+use crate::accel::counters::{self, Steps};
 use crate::accel::packet::{PACKET, bits};
 use crate::accel::{Hit, Surface};
 use crate::geometry::ray::Ray;
 use crate::render::renderer::Renderer;
 use crate::render::sampler::PixelPattern;
 use crate::render::tiles::{TILE, Tile};
-use crate::render::whitted::{Bounces, PixelSample, RayCounts, ShadowRay, Whitted};
+use crate::render::whitted::{Bounces, PixelSample, RayCounts, RayKind, ShadowRay, Whitted};
 
 /// Light samples whose shadow rays are traced as packets (one bit each in a lane's mask); the shading
 /// asks for any more ray by ray.
@@ -33,10 +34,22 @@ impl Whitted<'_> {
         rays: &PerRay<Ray>,
         active: u8,
         depth: u32,
+        kind: RayKind,
         samples: &mut PerRay<PixelSample>,
     ) -> PerRay<Vec3> {
         let mut hits = [Hit::miss(f32::INFINITY); PACKET];
-        let hit = self.accel.intersect_packet(rays, active, 0.0, &mut hits);
+        let hit = if self.counts() {
+            let hit = self
+                .accel
+                .counting()
+                .intersect_packet(rays, active, 0.0, &mut hits);
+            for k in bits(active) {
+                *samples[k].rays.steps.of(kind) += counters::lane(k);
+            }
+            hit
+        } else {
+            self.accel.intersect_packet(rays, active, 0.0, &mut hits)
+        };
         if depth == 0 {
             for k in bits(hit) {
                 samples[k].rays.primary_hits += 1;
@@ -63,12 +76,12 @@ impl Whitted<'_> {
                     (next[k], mask) = (r, mask | 1 << k);
                 }
             }
-            *seen = self.trace_lanes(&next, mask, depth + 1, samples);
+            *seen = self.trace_lanes(&next, mask, depth + 1, RayKind::secondary(i), samples);
         }
 
         let mut out = [Vec3::ZERO; PACKET];
         for k in bits(active) {
-            let mut extra_shadows = 0;
+            let (mut extra_shadows, mut steps) = (0, Steps::default());
             out[k] = match &surfaces[k] {
                 None => self.shade(&rays[k], &hits[k], depth, &mut samples[k]),
                 Some(s) => self.shade_surface(
@@ -80,13 +93,14 @@ impl Whitted<'_> {
                         0..PACKET_LIGHTS => blocked[k] >> i & 1 == 1,
                         _ => {
                             extra_shadows += 1;
-                            self.accel.occluded(&shadow.ray, 0.0, shadow.distance)
+                            self.blocked(shadow, &mut steps)
                         }
                     },
                     &mut |i, _| seen[i][k],
                 ),
             };
             samples[k].rays.shadow += extra_shadows;
+            samples[k].rays.steps.shadow += steps;
         }
         out
     }
@@ -99,14 +113,15 @@ impl Whitted<'_> {
         rays: &PerRay<Ray>,
         mask: u8,
         depth: u32,
+        kind: RayKind,
         samples: &mut PerRay<PixelSample>,
     ) -> PerRay<Vec3> {
         if coherent(bits(mask).map(|k| &rays[k])) {
-            return self.shade_packet(rays, mask, depth, samples);
+            return self.shade_packet(rays, mask, depth, kind, samples);
         }
         let mut out = [Vec3::ZERO; PACKET];
         for k in bits(mask) {
-            out[k] = self.trace(&rays[k], depth, &mut samples[k]);
+            out[k] = self.trace(&rays[k], depth, kind, &mut samples[k]);
         }
         out
     }
@@ -137,7 +152,15 @@ impl Whitted<'_> {
                 for k in bits(active) {
                     samples[k].rays.shadow += 1;
                 }
-                let hit = self.accel.occluded_packet(&rays, active, 0.0, &t_max);
+                let hit = if self.counts() {
+                    let hit = self.accel.counting().occluded_packet(&rays, active, 0.0, &t_max);
+                    for k in bits(active) {
+                        samples[k].rays.steps.shadow += counters::lane(k);
+                    }
+                    hit
+                } else {
+                    self.accel.occluded_packet(&rays, active, 0.0, &t_max)
+                };
                 for k in bits(hit) {
                     blocked[k] |= 1 << i;
                 }
@@ -182,7 +205,9 @@ impl Renderer<'_> {
                         rays[k] = ray;
                         sample
                     });
-                    let colors = self.whitted.shade_packet(&rays, active, 0, &mut samples);
+                    let colors = self
+                        .whitted
+                        .shade_packet(&rays, active, 0, RayKind::Camera, &mut samples);
                     for k in bits(active) {
                         sums[k] += colors[k];
                         samples[k].rays.primary += 1;

@@ -8,7 +8,7 @@ use super::TilePixels;
 use crate::render::renderer::Renderer;
 use crate::render::sampler::PixelPattern;
 use crate::render::tiles::{TILE, Tile};
-use crate::render::whitted::RayCounts;
+use crate::render::whitted::{RayCounts, RayKind};
 
 impl Renderer<'_> {
     /// Shades `tile` for pass `pass` pixel by pixel into `buf`, counting the rays into `rays`.
@@ -42,7 +42,7 @@ impl Renderer<'_> {
         let mut sum = Vec3::ZERO;
         for s in 0..self.samples() {
             let (ray, mut sample) = self.camera_sample(x, y, pass, s, pattern);
-            sum += self.whitted.trace(&ray, 0, &mut sample);
+            sum += self.whitted.trace(&ray, 0, RayKind::Camera, &mut sample);
             sample.rays.primary += 1;
             *rays += sample.rays;
         }

@@ -18,13 +18,15 @@ use std::cell::RefCell;
 use glam::Vec3;
 
 use super::{BLOCK_H, BLOCK_W, TilePixels, coherent};
+use crate::accel::counters::{self, Steps};
 use crate::accel::packet::first;
-use crate::accel::{Hit, PACKET, Surface};
+use crate::accel::policy::HitPolicy;
+use crate::accel::{Counting, Hit, PACKET, Plain, Surface, Tally};
 use crate::geometry::ray::Ray;
 use crate::render::renderer::Renderer;
 use crate::render::sampler::PixelPattern;
 use crate::render::tiles::{TILE, Tile};
-use crate::render::whitted::{Bounces, PixelSample, RayCounts, ShadowRay};
+use crate::render::whitted::{Bounces, PixelSample, RayCounts, RayKind, ShadowRay};
 
 /// The most pixel samples in flight at once: past this (many samples per pixel), a set of tiles is
 /// traced in batches of whole pixels' samples, so that a worker's state stays bounded (about 130 bytes
@@ -76,8 +78,11 @@ struct StreamBuffers {
     hits: Vec<Hit>,
     shadow_rays: Vec<Ray>,
     shadow_t: Vec<f32>,
-    /// Each shadow ray's light sample.
+    /// Each shadow ray's light sample, and the sample it is for.
     shadow_light: Vec<u32>,
+    shadow_owner: Vec<u32>,
+    /// The steps of each ray traced by the last [`Renderer::trace_split`], when counting.
+    steps: Vec<Steps>,
     /// The rays to trace in order (the generation's in sample order, its shadow rays light by
     /// light), where each run of them ends, and the count of each light's shadow rays.
     order: Vec<u32>,
@@ -205,11 +210,22 @@ impl Renderer<'_> {
             b.runs.clear();
             b.runs.push(b.rays.len() as u32);
             self.trace_split::<false>(b, 0);
+            if whitted.counts() {
+                for (j, &n) in b.queue.iter().enumerate() {
+                    let node = &b.nodes[n as usize];
+                    let kind = match node.depth {
+                        0 => RayKind::Camera,
+                        _ => RayKind::secondary(node.slot as usize),
+                    };
+                    *walks[node.sample as usize].sample.rays.steps.of(kind) += b.steps[j];
+                }
+            }
             // Each hit's surface, bounces (in each sample's single-ray order: one ray a sample) and
             // shadow rays.
             b.shadow_rays.clear();
             b.shadow_t.clear();
             b.shadow_light.clear();
+            b.shadow_owner.clear();
             for (j, &n) in b.queue.iter().enumerate() {
                 let node = &mut b.nodes[n as usize];
                 let hit = b.hits[j];
@@ -228,6 +244,7 @@ impl Renderer<'_> {
                         b.shadow_rays.push(shadow.ray);
                         b.shadow_t.push(shadow.distance);
                         b.shadow_light.push(i as u32);
+                        b.shadow_owner.push(node.sample);
                     }
                 }
                 walk.sample.rays.shadow += (b.blocked.len() + b.shadow_rays.len() - node.shadows) as u64;
@@ -236,6 +253,11 @@ impl Renderer<'_> {
             b.blocked.resize(start + b.shadow_rays.len(), false);
             by_light(b);
             self.trace_split::<true>(b, start);
+            if whitted.counts() {
+                for (j, &owner) in b.shadow_owner.iter().enumerate() {
+                    walks[owner as usize].sample.rays.steps.shadow += b.steps[j];
+                }
+            }
             // Each sample's next ray, or its finished rays' colours, up its tree.
             let queue = std::mem::take(&mut b.queue);
             b.next.clear();
@@ -252,8 +274,23 @@ impl Renderer<'_> {
     /// `start` on). Each run is cut into chunks of eight; a chunk that is [`coherent`] is traced as a
     /// packet (the packet driver's rule), the others' rays together as one stream.
     fn trace_split<const ANY: bool>(&self, b: &mut StreamBuffers, start: usize) {
-        let accel = self.whitted.accel;
+        if self.whitted.counts() {
+            self.trace_runs::<ANY, Counting>(b, start);
+        } else {
+            self.trace_runs::<ANY, Plain>(b, start);
+        }
+    }
+
+    /// [`Renderer::trace_split`] through the verbs of `T`: counting ones leave each ray's steps in
+    /// `b.steps`.
+    fn trace_runs<const ANY: bool, T: Tally>(&self, b: &mut StreamBuffers, start: usize) {
+        let accel = self.whitted.accel.verbs::<T>();
+        let count = T::Closest::COUNT;
         let rays = if ANY { &b.shadow_rays } else { &b.rays };
+        if count {
+            b.steps.clear();
+            b.steps.resize(rays.len(), Steps::default());
+        }
         b.stream.clear();
         let mut from = 0;
         for &end in &b.runs {
@@ -280,6 +317,11 @@ impl Renderer<'_> {
                         b.hits[j as usize] = hits[k];
                     }
                 }
+                if count {
+                    for (k, &j) in ids.iter().enumerate() {
+                        b.steps[j as usize] = counters::lane(k);
+                    }
+                }
             }
             from = end;
         }
@@ -302,6 +344,11 @@ impl Renderer<'_> {
             accel.intersect_stream(&b.stream_rays, 0.0, &mut b.stream_hits);
             for (&j, &hit) in b.stream.iter().zip(&b.stream_hits) {
                 b.hits[j as usize] = hit;
+            }
+        }
+        if count {
+            for (i, &j) in b.stream.iter().enumerate() {
+                b.steps[j as usize] = counters::lane(i);
             }
         }
     }

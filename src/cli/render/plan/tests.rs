@@ -41,6 +41,7 @@ fn options_take_the_arguments_and_one_side_keeps_the_aspect_ratio() {
         seed: 9,
         roughness: 0.3,
         spd: false,
+        count_steps: false,
     };
     assert_eq!(p.options, expected);
     assert_eq!((plan("--height 30").options.width), 40);
