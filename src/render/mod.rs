@@ -20,6 +20,7 @@ pub mod camera;
 pub mod env;
 pub mod film;
 pub mod frame;
+pub mod heatmap;
 mod kernel;
 pub mod light;
 pub mod memory;
