@@ -54,14 +54,19 @@ def main():
         if words and words[0] == "kinds":
             counts = {words[i]: int(words[i + 1]) for i in range(1, len(words), 2)}
 
+    def verb(f, suffix):
+        # A verb is `Accel::<verb>` or, written once for both tallies, `Verbs<...>::<verb>`.
+        name = suffix.removeprefix("Accel")
+        return f.endswith(suffix) or ("Verbs<" in f and f.endswith(">" + name))
+
     def inclusive(suffix):
-        return sum(c for f, (c, _) in functions.items() if f.endswith(suffix))
+        return sum(c for f, (c, _) in functions.items() if verb(f, suffix))
 
     def called_by(suffix, caller_test):
         return sum(
             n
             for f, (_, callers) in functions.items()
-            if f.endswith(suffix)
+            if verb(f, suffix)
             for caller, n in callers
             if caller_test(caller)
         )

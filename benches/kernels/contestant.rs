@@ -1,7 +1,9 @@
 //! What every row of the bench is: something that traces the bench's rays, ours or a peer's, one ray at
 //! a time or in packets. The bench is one loop over these, the ray sets and the thread counts.
 
-use whitted::accel::{Accel, Hit};
+use whitted::accel::counters::{self, Steps};
+use whitted::accel::policy::HitPolicy;
+use whitted::accel::{Accel, Counting, Hit, PACKET, Plain, Tally};
 use whitted::geometry::ray::Ray;
 use whitted::kit::contestants::Contestant as Built;
 use whitted::kit::workload::packets_of;
@@ -116,42 +118,79 @@ impl Contestant for Ours<'_> {
     }
 
     fn closest(&self, rays: &[Segment]) -> usize {
-        match self.verb {
-            Verb::Packets => packets_of(rays, |r, active, t_max| {
-                let mut hits = t_max.map(Hit::miss);
-                self.accel.intersect_packet(r, active, 0.0, &mut hits)
-            }),
-            Verb::Streams => streams_of(rays, |r, t_max| {
-                let mut hits: Vec<Hit> = t_max.iter().map(|&t| Hit::miss(t)).collect();
-                self.accel.intersect_stream(r, 0.0, &mut hits);
-                hits.iter().filter(|h| h.is_hit()).count()
-            }),
-            Verb::Single => {
-                let mut hits = 0;
-                for (ray, t_max) in rays {
-                    let mut hit = Hit::miss(*t_max);
-                    hits += self.accel.intersect(ray, 0.0, &mut hit) as usize;
-                }
-                hits
-            }
-        }
+        self.trace::<Plain>(rays, false).0
     }
 
     fn occluded(&self, rays: &[Segment]) -> usize {
-        match self.verb {
-            Verb::Packets => packets_of(rays, |r, active, t_max| {
-                self.accel.occluded_packet(r, active, 0.0, t_max)
+        self.trace::<Plain>(rays, true).0
+    }
+}
+
+impl Ours<'_> {
+    /// The mean nodes visited and primitives tested per ray of `rays` (any hit or closest), counted
+    /// by the counting verbs of the row's kernel: the table beside Mrays/s, so that a faster row can be
+    /// told apart as fewer steps or cheaper steps.
+    pub fn steps_per_ray(&self, rays: &[Segment], any: bool) -> (f64, f64) {
+        let steps = self.trace::<Counting>(rays, any).1;
+        let n = rays.len().max(1) as f64;
+        (steps.nodes as f64 / n, steps.prims as f64 / n)
+    }
+
+    /// The rays that hit (or are blocked) through the verbs of `T`, and the steps counted (none
+    /// for [`Plain`]).
+    fn trace<T: Tally>(&self, rays: &[Segment], any: bool) -> (usize, Steps) {
+        let verbs = self.accel.verbs::<T>();
+        // The kernels' closures are `Fn`: the sum goes through a cell.
+        let steps = std::cell::Cell::new(Steps::default());
+        let tally = |n: usize| {
+            if T::Closest::COUNT {
+                let mut sum = steps.get();
+                (0..n).for_each(|k| sum += counters::lane(k));
+                steps.set(sum);
+            }
+        };
+        let hits = match (self.verb, any) {
+            (Verb::Packets, false) => packets_of(rays, |r, active, t_max| {
+                let mut hits = t_max.map(Hit::miss);
+                let hit = verbs.intersect_packet(r, active, 0.0, &mut hits);
+                tally(PACKET);
+                hit
             }),
-            Verb::Streams => streams_of(rays, |r, t_max| {
+            (Verb::Packets, true) => packets_of(rays, |r, active, t_max| {
+                let blocked = verbs.occluded_packet(r, active, 0.0, t_max);
+                tally(PACKET);
+                blocked
+            }),
+            (Verb::Streams, false) => streams_of(rays, |r, t_max| {
+                let mut hits: Vec<Hit> = t_max.iter().map(|&t| Hit::miss(t)).collect();
+                verbs.intersect_stream(r, 0.0, &mut hits);
+                tally(r.len());
+                hits.iter().filter(|h| h.is_hit()).count()
+            }),
+            (Verb::Streams, true) => streams_of(rays, |r, t_max| {
                 let mut blocked = vec![false; r.len()];
-                self.accel.occluded_stream(r, 0.0, t_max, &mut blocked);
+                verbs.occluded_stream(r, 0.0, t_max, &mut blocked);
+                tally(r.len());
                 blocked.iter().filter(|&&b| b).count()
             }),
-            Verb::Single => rays
+            (Verb::Single, false) => rays
                 .iter()
-                .filter(|(ray, t_max)| self.accel.occluded(ray, 0.0, *t_max))
+                .filter(|(ray, t_max)| {
+                    let found = verbs.intersect(ray, 0.0, &mut Hit::miss(*t_max));
+                    tally(1);
+                    found
+                })
                 .count(),
-        }
+            (Verb::Single, true) => rays
+                .iter()
+                .filter(|(ray, t_max)| {
+                    let blocked = verbs.occluded(ray, 0.0, *t_max);
+                    tally(1);
+                    blocked
+                })
+                .count(),
+        };
+        (hits, steps.get())
     }
 }
 

@@ -77,17 +77,31 @@ impl Renderer<'_> {
                 }
                 let mut bufs = vec![[Vec3::ZERO; (TILE * TILE) as usize]; set.len()];
                 let mut counts = vec![RayCounts::default(); set.len()];
+                // Each pixel's rays, where the render counts steps (for heatmaps).
+                let per_tile = (TILE * TILE) as usize;
+                let mut pixels = self
+                    .whitted
+                    .counts()
+                    .then(|| vec![RayCounts::default(); set.len() * per_tile]);
+                let first = pixels.as_deref_mut().map(|p| &mut p[..per_tile]);
                 match kernel {
-                    Kernel::Single => self.tile_single(set[0], pass, &mut bufs[0], &mut counts[0]),
-                    Kernel::Packet => self.tile_packets(set[0], pass, &mut bufs[0], &mut counts[0]),
-                    Kernel::Stream => self.tiles_streamed(set, pass, &mut bufs, &mut counts),
+                    Kernel::Single => self.tile_single(set[0], pass, &mut bufs[0], &mut counts[0], first),
+                    Kernel::Packet => self.tile_packets(set[0], pass, &mut bufs[0], &mut counts[0], first),
+                    Kernel::Stream => {
+                        let all = pixels.as_deref_mut().unwrap_or_default();
+                        self.tiles_streamed(set, pass, &mut bufs, &mut counts, all)
+                    }
                 }
                 set.iter()
                     .zip(bufs)
                     .zip(counts)
-                    .map(|((&tile, buf), rays)| {
+                    .enumerate()
+                    .map(|(i, ((&tile, buf), rays))| {
                         on_tile();
-                        Some((tile, buf, rays))
+                        let mine = pixels
+                            .as_ref()
+                            .map(|p| p[i * per_tile..(i + 1) * per_tile].to_vec());
+                        Some((tile, buf, rays, mine))
                     })
                     .collect()
             })
@@ -98,7 +112,7 @@ impl Renderer<'_> {
 }
 
 /// A tile's pixels and the rays they took.
-type TileDone = (Tile, TilePixels, RayCounts);
+type TileDone = (Tile, TilePixels, RayCounts, Option<Vec<RayCounts>>);
 
 /// A pass over some tiles as [`Renderer::render_tiles`] left it: every tile's pixels, or, if it was
 /// stopped, those of the tiles finished before the stop (so that an interrupted render can keep them).
@@ -122,7 +136,7 @@ impl TilePass {
     /// The rays the finished tiles traced.
     pub fn rays(&self) -> RayCounts {
         let mut rays = RayCounts::default();
-        for (_, _, r) in self.tiles.iter().flatten() {
+        for (_, _, r, _) in self.tiles.iter().flatten() {
             rays += *r;
         }
         rays
@@ -131,8 +145,18 @@ impl TilePass {
     /// Hands each finished tile and its pixels (row-major at a stride of [`TILE`]) to `sink`, in the
     /// order the tiles were asked for.
     pub fn for_each(&self, mut sink: impl FnMut(Tile, &[Vec3])) {
-        for (tile, buf, _) in self.tiles.iter().flatten() {
+        for (tile, buf, _, _) in self.tiles.iter().flatten() {
             sink(*tile, buf);
+        }
+    }
+
+    /// Each finished tile and its pixels' rays (row by row, [`TILE`] a row), where the render counted
+    /// steps ([`super::Options::count_steps`]).
+    pub fn for_each_pixel_rays(&self, mut sink: impl FnMut(Tile, &[RayCounts])) {
+        for (tile, _, _, pixels) in self.tiles.iter().flatten() {
+            if let Some(p) = pixels {
+                sink(*tile, p);
+            }
         }
     }
 }

@@ -1,13 +1,10 @@
-//! Cost heatmaps: per-pixel counts (BVH nodes tested, primitive tests, rays traced, summed over every
-//! ray a pixel sends) written as a false-colour PNG with a legend, or as raw float EXR; and
-//! [`Histogram`], exact statistics of per-ray counts.
+//! Cost heatmaps: per-pixel counts (BVH nodes visited, primitive tests, rays traced, summed over every
+//! ray a pixel sends) written as a false-colour PNG with a legend, and as raw float EXR.
 //!
-//! The colours are turbo (A. Mikhailov, "Turbo, An Improved Rainbow Colormap for Visualization",
-//! Google AI Blog, 2019): a rainbow that, unlike jet, has no false bands, so that equal steps of cost
-//! read as equal steps of colour while the hue still tells the level at a glance. It comes from
-//! `colorous::TURBO`, a maintained port of d3-scale-chromatic's turbo, not from colours tuned here.
-//! That is a polynomial fit to Mikhailov's published table, not the table: up to 32 8-bit steps off it at
-//! the ends (nearly black rather than dark violet at 0), as `turbo_matches_the_published_table` records.
+//! The colours are viridis (S. van der Walt and N. Smith, matplotlib's default colour map, 2015):
+//! perceptually uniform, so that equal steps of cost read as equal steps of colour, legible to colour
+//! blind readers and in grey; from `colorous::VIRIDIS`, d3-scale-chromatic's copy of the published
+//! 256-entry table, not from colours tuned here.
 //!
 //! The legend is drawn with the public-domain 8×8 glyphs of `font8x8`: a PNG that says what it counts
 //! and where its scale ends is readable without the command line that made it.
@@ -19,10 +16,10 @@ use glam::Vec3;
 use crate::error::{Error, Result};
 use crate::render::film::{Film, ImageFormat};
 
-/// Turbo at `t` (0 the bottom of the map, 1 the top; clamped, NaN is 0), as sRGB bytes.
-pub fn turbo(t: f32) -> [u8; 3] {
+/// Viridis at `t` (0 the bottom of the map, 1 the top; clamped, NaN is 0), as sRGB bytes.
+pub fn viridis(t: f32) -> [u8; 3] {
     let t = if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) };
-    let c = colorous::TURBO.eval_continuous(f64::from(t));
+    let c = colorous::VIRIDIS.eval_continuous(f64::from(t));
     [c.r, c.g, c.b]
 }
 
@@ -40,7 +37,7 @@ pub struct Heatmap {
 }
 
 /// The legend's background, also the padding beside an image too narrow for the legend's text: a
-/// neutral grey rather than black, since turbo's bottom is nearly black and a zero-cost pixel must not
+/// neutral grey rather than black, since viridis's bottom is nearly black and a zero-cost pixel must not
 /// look like padding.
 const BACKGROUND: [u8; 3] = [64, 64, 64];
 /// The legend's text and tick marks.
@@ -80,15 +77,15 @@ impl Heatmap {
             .collect()
     }
 
-    /// Writes the map in false colour (turbo, linear from 0 at the bottom to [`Heatmap::max`] at the
+    /// Writes the map in false colour (viridis, linear from 0 at the bottom to [`Heatmap::max`] at the
     /// top; non-finite and negative values count as 0) with a legend strip below it: the colour ramp,
     /// ticks and numbers at 0, 1/4, 1/2, 3/4 and the maximum, and [`Heatmap::what`]. An image too
     /// narrow for the legend is centred on a wider canvas. `path` must name a `.png` file; it is
-    /// written atomically, with an sRGB chunk (turbo's colours are sRGB), by the film's writer.
+    /// written atomically, with an sRGB chunk (viridis's colours are sRGB), by the film's writer.
     pub fn write_png(&self, path: &Path) -> Result<()> {
         self.check(path, ImageFormat::Png, "png")?;
         let (width, height, rgb) = self.to_rgb8();
-        // The film's PNG writer encodes linear values to sRGB bytes: decode turbo's bytes so that it
+        // The film's PNG writer encodes linear values to sRGB bytes: decode viridis's bytes so that it
         // writes them back unchanged (exact for all 256, `srgb_round_trip_is_exact`).
         let lut: Vec<f32> = (0..=255u8).map(srgb_decode).collect();
         let film = Film {
@@ -137,8 +134,19 @@ impl Heatmap {
         Ok(())
     }
 
-    /// The false-colour image with its legend: canvas width, height and sRGB pixels, row-major.
+    /// The false-colour image at its own size with the legend drawn over its bottom rows (clipped where
+    /// the image is narrower than the legend): sRGB pixels, row-major; for the viewer's window.
+    pub fn overlaid(&self) -> Vec<[u8; 3]> {
+        self.draw(true).2
+    }
+
+    /// The false-colour image with its legend below it: canvas width, height and sRGB pixels, row-major.
     fn to_rgb8(&self) -> (u32, u32, Vec<[u8; 3]>) {
+        self.draw(false)
+    }
+
+    /// The image and its legend, below it on a canvas wide enough for it, or over its bottom rows.
+    fn draw(&self, overlay: bool) -> (u32, u32, Vec<[u8; 3]>) {
         let s = if self.width > LARGE_IMAGE { 2 } else { 1 };
         let labels = self.legend_labels();
         let margin = MARGIN * s;
@@ -156,11 +164,16 @@ impl Heatmap {
             .max()
             .unwrap_or(0);
         let bar_width = (4 * quarter).max(MIN_BAR * s);
-        let width = self
-            .width
-            .max(bar_width + 2 * margin)
-            .max(text_width(&self.what) + 2 * margin);
-        let height = self.height + LEGEND_HEIGHT * s;
+        let (width, height, legend_y) = if overlay {
+            let top = self.height.saturating_sub(LEGEND_HEIGHT * s);
+            (self.width, self.height, top)
+        } else {
+            let width = self
+                .width
+                .max(bar_width + 2 * margin)
+                .max(text_width(&self.what) + 2 * margin);
+            (width, self.height + LEGEND_HEIGHT * s, self.height)
+        };
         let mut canvas = Canvas {
             width,
             height,
@@ -173,16 +186,17 @@ impl Heatmap {
         for (y, row) in self.values.chunks_exact(self.width as usize).enumerate() {
             for (x, &v) in row.iter().enumerate() {
                 let t = if max > 0.0 && v.is_finite() { v / max } else { 0.0 };
-                canvas.set(x0 + x as u32, y as u32, turbo(t));
+                canvas.set(x0 + x as u32, y as u32, viridis(t));
             }
         }
 
-        // The colour bar, its ticks, their numbers, and the label.
+        // The colour bar, its ticks, their numbers, and the label (over a strip of background).
+        canvas.fill(0, legend_y, width, LEGEND_HEIGHT * s, BACKGROUND);
         let bar_x = margin;
-        let bar_width = width - 2 * margin;
-        let mut y = self.height + margin;
+        let bar_width = width.saturating_sub(2 * margin).max(1);
+        let mut y = legend_y + margin;
         for x in 0..bar_width {
-            let c = turbo(x as f32 / (bar_width - 1).max(1) as f32);
+            let c = viridis(x as f32 / (bar_width - 1).max(1) as f32);
             canvas.fill(bar_x + x, y, 1, BAR * s, c);
         }
         y += BAR * s;
@@ -282,153 +296,36 @@ fn format_label(v: f64) -> String {
     if s == "-0" { "0".into() } else { s.into() }
 }
 
-/// Exact statistics of per-ray counts (nodes tested or primitive tests of one ray): how many rays had
-/// each count. Adding is O(1) amortised with no allocation but growth, merging per-thread histograms is
-/// exact, and any percentile is a real ray's count. Memory is 8 bytes per possible value up to the
-/// largest seen (a ray's count is bounded by the accelerator's size).
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct Histogram {
-    /// `counts[v]`: the rays whose count was `v`.
-    counts: Vec<u64>,
-    rays: u64,
-    sum: u128,
-}
-
-impl Histogram {
-    /// An empty histogram.
-    pub fn new() -> Self {
-        Self::default()
-    }
-
-    /// Counts one ray whose count was `v`.
-    pub fn add(&mut self, v: u32) {
-        let i = v as usize;
-        if i >= self.counts.len() {
-            // `resize` reserves by doubling: growth is amortised.
-            self.counts.resize(i + 1, 0);
-        }
-        self.counts[i] += 1;
-        self.rays += 1;
-        self.sum += u128::from(v);
-    }
-
-    /// Adds `other`'s rays, as if each had been added here.
-    pub fn merge(&mut self, other: &Histogram) {
-        if other.counts.len() > self.counts.len() {
-            self.counts.resize(other.counts.len(), 0);
-        }
-        for (a, b) in self.counts.iter_mut().zip(&other.counts) {
-            *a += b;
-        }
-        self.rays += other.rays;
-        self.sum += other.sum;
-    }
-
-    /// The number of rays.
-    pub fn count(&self) -> u64 {
-        self.rays
-    }
-
-    /// The mean count; `None` without rays.
-    pub fn mean(&self) -> Option<f64> {
-        (self.rays > 0).then(|| self.sum as f64 / self.rays as f64)
-    }
-
-    /// The nearest-rank median, [`Histogram::percentile`] 50: for an even number of rays the lower of
-    /// the two middle counts (1..=100: 50), always a count some ray had. `None` without rays.
-    pub fn median(&self) -> Option<u32> {
-        self.percentile(50.0)
-    }
-
-    /// The nearest-rank `p`-th percentile (`p` in 0..=100): the smallest count that at least `p`% of
-    /// the rays do not exceed, i.e. the count of rank ⌈p·n/100⌉ (at least 1) in sorted order.
-    /// `None` without rays.
-    ///
-    /// # Panics
-    /// If `p` is not within 0..=100.
-    pub fn percentile(&self, p: f64) -> Option<u32> {
-        assert!((0.0..=100.0).contains(&p), "percentile {p} is not within 0..=100");
-        if self.rays == 0 {
-            return None;
-        }
-        let rank = ((p * self.rays as f64 / 100.0).ceil() as u64).clamp(1, self.rays);
-        let mut seen = 0;
-        for (v, &c) in self.counts.iter().enumerate() {
-            seen += c;
-            if seen >= rank {
-                return Some(v as u32);
-            }
-        }
-        unreachable!("the counts sum to the number of rays")
-    }
-
-    /// The largest count; `None` without rays.
-    pub fn max(&self) -> Option<u32> {
-        self.counts.iter().rposition(|&c| c > 0).map(|v| v as u32)
-    }
-
-    /// `{"rays": n, "mean": .., "median": .., "p99": .., "max": ..}`; without rays, `rays` is 0 and the
-    /// others are null.
-    pub fn to_json(&self) -> serde_json::Value {
-        serde_json::json!({
-            "rays": self.rays,
-            "mean": self.mean(),
-            "median": self.median(),
-            "p99": self.percentile(99.0),
-            "max": self.max(),
-        })
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Google's published turbo table (`turbo_colormap_data`, Mikhailov 2019): entries 0 and 255, and
-    /// the mean of entries 127 and 128 (0.5 lies between them), as 0..1 sRGB values.
-    const PUBLISHED_0: [f32; 3] = [0.18995, 0.07176, 0.23217];
+    /// matplotlib's published viridis table (`_viridis_data`, van der Walt and Smith 2015): entries 0
+    /// and 255, and the mean of entries 127 and 128 (0.5 lies between them), as 0..1 sRGB values.
+    const PUBLISHED_0: [f32; 3] = [0.267004, 0.004874, 0.329415];
     const PUBLISHED_HALF: [f32; 3] = [
-        (0.63323 + 0.64362) / 2.0,
-        (0.99195 + 0.98999) / 2.0,
-        (0.23937 + 0.23356) / 2.0,
+        (0.128729 + 0.127568) / 2.0,
+        (0.563265 + 0.566949) / 2.0,
+        (0.551229 + 0.550556) / 2.0,
     ];
-    const PUBLISHED_1: [f32; 3] = [0.47960, 0.01583, 0.01055];
+    const PUBLISHED_1: [f32; 3] = [0.993248, 0.906157, 0.143936];
 
-    /// How far `colorous::TURBO`, d3-scale-chromatic's polynomial fit, strays from the published table
-    /// at the three points, in 8-bit steps: 14 (red), 5 and 32 (blue) at 0, 15 and 20 at 0.5, 22 at 1.
-    /// The goal is one step (the table itself); this bound only stops the ramp drifting further.
-    const FIT_ERROR: f32 = 33.0;
-
-    /// Turbo against Google's published table at 0, 0.5 and 1.
+    /// Viridis against the published table at 0, 0.5 and 1, within one 8-bit step.
     #[test]
-    fn turbo_matches_the_published_table() {
+    fn viridis_is_the_published_table() {
         for (t, want) in [(0.0, PUBLISHED_0), (0.5, PUBLISHED_HALF), (1.0, PUBLISHED_1)] {
-            let got = turbo(t);
+            let got = viridis(t);
             for c in 0..3 {
                 let want = want[c] * 255.0;
                 assert!(
-                    (f32::from(got[c]) - want).abs() <= FIT_ERROR,
-                    "turbo({t}) = {got:?}, channel {c}: want {want:.2} within {FIT_ERROR} steps"
+                    (f32::from(got[c]) - want).abs() <= 1.0,
+                    "viridis({t}) = {got:?}, channel {c}: want {want:.2}"
                 );
             }
         }
-    }
-
-    /// The ramp's shape, which colorous and the table agree on: dark at the bottom, then blue, bright
-    /// green in the middle, dark red at the top.
-    #[test]
-    fn turbo_runs_from_dark_through_blue_and_green_to_dark_red() {
-        let [r, g, b] = turbo(0.0).map(u32::from);
-        assert!(r + g + b < 200, "{:?}", turbo(0.0));
-        let [r, g, b] = turbo(0.15).map(u32::from);
-        assert!(b > 200 && b > r && b > g, "{:?}", turbo(0.15));
-        let [r, g, b] = turbo(0.5).map(u32::from);
-        assert!(g > 200 && g > r && g > b, "{:?}", turbo(0.5));
-        let [r, g, b] = turbo(1.0).map(u32::from);
-        assert!(r > 100 && r > 4 * g && r > 4 * b, "{:?}", turbo(1.0));
-        assert_eq!(turbo(-1.0), turbo(0.0));
-        assert_eq!(turbo(f32::NAN), turbo(0.0));
-        assert_eq!(turbo(7.0), turbo(1.0));
+        assert_eq!(viridis(-1.0), viridis(0.0));
+        assert_eq!(viridis(f32::NAN), viridis(0.0));
+        assert_eq!(viridis(7.0), viridis(1.0));
     }
 
     /// The film's writer gives back every byte [`srgb_decode`] decoded.
@@ -515,7 +412,7 @@ mod tests {
     }
 
     #[test]
-    fn zero_is_turbos_bottom_and_the_max_its_top() {
+    fn zero_is_the_maps_bottom_and_the_max_its_top() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("halves.png");
         let (w, h) = (20, 10);
@@ -535,15 +432,15 @@ mod tests {
         assert!(img.width() > w);
         assert_eq!(
             img.get_pixel(x0, h - 1).0,
-            turbo(0.0),
+            viridis(0.0),
             "bottom-left of the zero half"
         );
-        assert_eq!(img.get_pixel(x0 + w - 1, 0).0, turbo(1.0), "a max-valued pixel");
+        assert_eq!(img.get_pixel(x0 + w - 1, 0).0, viridis(1.0), "a max-valued pixel");
         assert_eq!(img.get_pixel(0, 0).0, BACKGROUND, "padding");
         // The colour bar runs from the bottom to the top.
         let bar_y = h + MARGIN + BAR / 2;
-        assert_eq!(img.get_pixel(MARGIN, bar_y).0, turbo(0.0));
-        assert_eq!(img.get_pixel(img.width() - MARGIN - 1, bar_y).0, turbo(1.0));
+        assert_eq!(img.get_pixel(MARGIN, bar_y).0, viridis(0.0));
+        assert_eq!(img.get_pixel(img.width() - MARGIN - 1, bar_y).0, viridis(1.0));
         assert_eq!(map.legend_labels(), ["0", "19.25", "38.5", "57.75", "77"]);
     }
 
@@ -563,7 +460,7 @@ mod tests {
         let x0 = (img.width() - 40) / 2;
         for y in 0..30 {
             for x in x0..x0 + 40 {
-                assert_eq!(img.get_pixel(x, y).0, turbo(0.0));
+                assert_eq!(img.get_pixel(x, y).0, viridis(0.0));
             }
         }
         map.write_exr(&dir.path().join("zero.exr")).unwrap();
@@ -627,87 +524,5 @@ mod tests {
             "{e}"
         );
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
-    }
-
-    #[test]
-    fn histogram_statistics_are_exact() {
-        let mut h = Histogram::new();
-        for v in 1..=100 {
-            h.add(v);
-        }
-        assert_eq!(h.count(), 100);
-        assert_eq!(h.mean(), Some(50.5));
-        assert_eq!(h.median(), Some(50), "nearest rank: the lower middle value");
-        assert_eq!(h.percentile(99.0), Some(99));
-        assert_eq!(h.percentile(100.0), Some(100));
-        assert_eq!(h.percentile(0.0), Some(1));
-        assert_eq!(h.percentile(1.0), Some(1));
-        assert_eq!(h.percentile(1.5), Some(2));
-        assert_eq!(h.max(), Some(100));
-        assert_eq!(
-            h.to_json(),
-            serde_json::json!({"rays": 100, "mean": 50.5, "median": 50, "p99": 99, "max": 100})
-        );
-        // Odd count: the median is the middle value.
-        let mut odd = Histogram::new();
-        for v in [7, 3, 3, 9, 1] {
-            odd.add(v);
-        }
-        assert_eq!(
-            (odd.median(), odd.mean(), odd.max()),
-            (Some(3), Some(4.6), Some(9))
-        );
-    }
-
-    #[test]
-    fn an_empty_histogram_has_no_statistics() {
-        let h = Histogram::new();
-        assert_eq!(h.count(), 0);
-        assert_eq!(
-            (h.mean(), h.median(), h.percentile(99.0), h.max()),
-            (None, None, None, None)
-        );
-        assert_eq!(
-            h.to_json(),
-            serde_json::json!({"rays": 0, "mean": null, "median": null, "p99": null, "max": null})
-        );
-        // One ray of count 0 is not empty.
-        let mut zero = Histogram::new();
-        zero.add(0);
-        assert_eq!(
-            (zero.median(), zero.max(), zero.mean()),
-            (Some(0), Some(0), Some(0.0))
-        );
-    }
-
-    #[test]
-    fn merging_is_adding_every_ray() {
-        let values: Vec<u32> = (0..1000u32).map(|i| (i * 7919) % 613).collect();
-        let mut all = Histogram::new();
-        let (mut a, mut b) = (Histogram::new(), Histogram::new());
-        for (i, &v) in values.iter().enumerate() {
-            all.add(v);
-            if i % 3 == 0 { a.add(v) } else { b.add(v) }
-        }
-        let mut merged = Histogram::new();
-        merged.merge(&a);
-        merged.merge(&b);
-        merged.merge(&Histogram::new());
-        assert_eq!(merged.to_json(), all.to_json());
-        assert_eq!(merged.count(), 1000);
-        let mut sorted = values.clone();
-        sorted.sort_unstable();
-        assert_eq!(merged.max(), sorted.last().copied());
-        // Nearest rank 990 of 1000, 1-based.
-        assert_eq!(merged.percentile(99.0), Some(sorted[989]));
-        assert_eq!(merged.median(), Some(sorted[499]));
-        let sum: u64 = values.iter().map(|&v| u64::from(v)).sum();
-        assert_eq!(merged.mean(), Some(sum as f64 / 1000.0));
-    }
-
-    #[test]
-    #[should_panic(expected = "is not within 0..=100")]
-    fn percentiles_past_100_are_refused() {
-        Histogram::new().percentile(101.0);
     }
 }

@@ -17,7 +17,7 @@ use glam::Vec3;
 use super::Renderer;
 use super::film::Film;
 use super::frame::TilePass;
-use super::tiles::{self, Tile};
+use super::tiles::{self, TILE, Tile};
 use super::whitted::RayCounts;
 
 /// Per-pixel sums of the passes so far over a set of tiles.
@@ -33,6 +33,9 @@ pub struct Progressive {
     passes: u32,
     /// The rays the passes folded in by [`Progressive::render_pass`] traced.
     rays: RayCounts,
+    /// Those rays pixel by pixel over the whole frame (row-major), where the passes counted steps
+    /// ([`super::Options::count_steps`]; for heatmaps); empty otherwise, and after a join.
+    pixel_rays: Vec<RayCounts>,
 }
 
 impl Progressive {
@@ -59,6 +62,7 @@ impl Progressive {
             sums: vec![[0.0; 3]; pixels],
             passes: 0,
             rays: RayCounts::default(),
+            pixel_rays: Vec::new(),
         }
     }
 
@@ -98,6 +102,18 @@ impl Progressive {
         self.fold(&rendered);
         self.passes += 1;
         self.rays += rendered.rays();
+        let w = self.width as usize;
+        rendered.for_each_pixel_rays(|tile, rays| {
+            if self.pixel_rays.is_empty() {
+                self.pixel_rays = vec![RayCounts::default(); w * self.height as usize];
+            }
+            for y in tile.y0..tile.y1 {
+                for x in tile.x0..tile.x1 {
+                    let r = rays[((y - tile.y0) * TILE + (x - tile.x0)) as usize];
+                    self.pixel_rays[y as usize * w + x as usize] += r;
+                }
+            }
+        });
         Ok(rendered.rays())
     }
 
@@ -211,6 +227,12 @@ impl Progressive {
     /// adds none).
     pub fn rays(&self) -> RayCounts {
         self.rays
+    }
+
+    /// The rays of each pixel of the frame (row-major) over the passes folded in, where they counted
+    /// steps (zero outside the tiles covered); `None` where they did not.
+    pub fn pixel_rays(&self) -> Option<&[RayCounts]> {
+        (!self.pixel_rays.is_empty()).then_some(&self.pixel_rays[..])
     }
 
     /// The frame's size.

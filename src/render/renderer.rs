@@ -14,7 +14,7 @@ use super::camera::RayCamera;
 use super::env::Background;
 use super::options::Options;
 use super::sampler::{PixelPattern, Sampler};
-use super::whitted::{PixelSample, RayCounts, RayKind, Whitted};
+use super::whitted::{PixelSample, RayKind, SampleRays, Whitted};
 use crate::accel::Accel;
 use crate::geometry::ray::Ray;
 use crate::scene::{Camera, Scene};
@@ -118,7 +118,8 @@ impl<'a> Renderer<'a> {
         PixelSample {
             lights: self.whitted.lights(uv),
             rng: Sampler::new(self.options.seed, pass, index, 1 + s),
-            rays: RayCounts::default(),
+            rays: SampleRays::default(),
+            slot: 0,
         }
     }
 

@@ -158,12 +158,62 @@ impl RayCounts {
     pub fn total(&self) -> u64 {
         self.primary + self.shadow + self.reflected + self.refracted
     }
+}
 
+/// The rays one pixel sample traced, by kind: [`RayCounts`] without the steps, which a counting
+/// render keeps apart ([`charge`]), so that a sample carries no more than it did before counting.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SampleRays {
+    /// Camera rays.
+    pub primary: u64,
+    /// Camera rays that hit something.
+    pub primary_hits: u64,
+    /// Shadow rays.
+    pub shadow: u64,
+    /// Mirror rays.
+    pub reflected: u64,
+    /// Refracted rays.
+    pub refracted: u64,
+}
+
+impl SampleRays {
     /// Counts the secondary rays of `bounces`.
     pub fn add_bounces(&mut self, bounces: &Bounces) {
         self.refracted += bounces.refracted.is_some() as u64;
         self.reflected += bounces.reflected.is_some() as u64;
     }
+}
+
+impl std::ops::AddAssign<SampleRays> for RayCounts {
+    fn add_assign(&mut self, o: SampleRays) {
+        self.primary += o.primary;
+        self.primary_hits += o.primary_hits;
+        self.shadow += o.shadow;
+        self.reflected += o.reflected;
+        self.refracted += o.refracted;
+    }
+}
+
+thread_local! {
+    /// A counting render's steps of each pixel sample in flight on this worker, by its slot
+    /// ([`PixelSample::slot`]): charged as its rays are traced, taken when the sample is summed.
+    static SAMPLE_STEPS: std::cell::RefCell<Vec<KindSteps>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Adds `steps`, of a ray of `kind`, to the sample in `slot`.
+pub(super) fn charge(slot: u32, kind: RayKind, steps: Steps) {
+    SAMPLE_STEPS.with_borrow_mut(|all| {
+        let slot = slot as usize;
+        if all.len() <= slot {
+            all.resize(slot + 1, KindSteps::default());
+        }
+        *all[slot].of(kind) += steps;
+    });
+}
+
+/// The steps charged to the sample in `slot`, which starts again from none.
+pub(super) fn take_steps(slot: u32) -> KindSteps {
+    SAMPLE_STEPS.with_borrow_mut(|all| all.get_mut(slot as usize).map(std::mem::take).unwrap_or_default())
 }
 
 impl std::ops::AddAssign for RayCounts {
@@ -185,7 +235,10 @@ pub struct PixelSample<'a> {
     /// This sample's generator (fuzzy reflections).
     pub rng: Sampler,
     /// Rays traced for this sample so far.
-    pub rays: RayCounts,
+    pub rays: SampleRays,
+    /// Where a counting render keeps this sample's steps ([`charge`]): unique among the samples a
+    /// worker has in flight.
+    pub slot: u32,
 }
 
 /// Tries at drawing a fuzzy reflection above the surface before settling for the mirror direction.
@@ -290,19 +343,32 @@ impl<'a> Whitted<'a> {
     pub fn trace(&self, ray: &Ray, depth: u32, kind: RayKind, sample: &mut PixelSample) -> Vec3 {
         let mut hit = Hit::miss(f32::INFINITY);
         if self.count {
-            self.accel.counting().intersect(ray, 0.0, &mut hit);
-            *sample.rays.steps.of(kind) += counters::lane(0);
+            self.closest_counted(ray, kind, sample, &mut hit);
         } else {
             self.accel.intersect(ray, 0.0, &mut hit);
         }
         self.shade(ray, &hit, depth, sample)
     }
 
+    /// [`Whitted::trace`]'s closest hit, counted: out of the way of the plain path.
+    #[cold]
+    #[inline(never)]
+    fn closest_counted(&self, ray: &Ray, kind: RayKind, sample: &PixelSample, hit: &mut Hit) {
+        self.accel.counting().intersect(ray, 0.0, hit);
+        charge(sample.slot, kind, counters::lane(0));
+    }
+
     /// Whether `shadow` is blocked, its steps added to `steps` when counting.
     pub(super) fn blocked(&self, shadow: &ShadowRay, steps: &mut Steps) -> bool {
-        if !self.count {
-            return self.accel.occluded(&shadow.ray, 0.0, shadow.distance);
+        if self.count {
+            return self.blocked_counted(shadow, steps);
         }
+        self.accel.occluded(&shadow.ray, 0.0, shadow.distance)
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn blocked_counted(&self, shadow: &ShadowRay, steps: &mut Steps) -> bool {
         let blocked = self.accel.counting().occluded(&shadow.ray, 0.0, shadow.distance);
         *steps += counters::lane(0);
         blocked
@@ -332,7 +398,9 @@ impl<'a> Whitted<'a> {
             &mut |i, r| self.trace(r, depth + 1, RayKind::secondary(i), sample),
         );
         sample.rays.shadow += shadows;
-        sample.rays.steps.shadow += steps;
+        if self.count {
+            charge(sample.slot, RayKind::Shadow, steps);
+        }
         color
     }
 

@@ -26,6 +26,7 @@ use rayon::ThreadPool;
 
 use crate::accel::{Accel, AccelKind, Prims};
 use crate::render::RayCounts;
+use crate::render::cost::CostKind;
 use crate::render::env::Background;
 use crate::render::film::{Film, to_u8};
 use crate::render::progressive::Progressive;
@@ -182,7 +183,13 @@ pub(crate) fn render_loop(
         let seconds = start.elapsed().as_secs_f64();
         acc.done(pass);
         let film = sums.film();
-        let pixels = film.pixels.iter().map(|&c| word(c, srgb)).collect();
+        let heatmap = job.heatmap.zip(sums.pixel_rays()).map(|(measure, rays)| {
+            let kind = CostKind { measure, rays: None };
+            let map = kind.heatmap(job.options.width, job.options.height, rays);
+            let rgb = |[r, g, b]: [u8; 3]| (u32::from(r) << 16) | (u32::from(g) << 8) | u32::from(b);
+            map.overlaid().into_iter().map(rgb).collect()
+        });
+        let pixels = heatmap.unwrap_or_else(|| film.pixels.iter().map(|&c| word(c, srgb)).collect());
         let frame = Frame {
             job,
             pass,
@@ -215,8 +222,9 @@ mod tests {
     use std::sync::mpsc;
 
     use super::*;
+    use crate::render::cost::Measure;
     use crate::render::{DEFAULT_DEPTH, Kernel};
-    use state::{Input, Key, Settings, ViewState};
+    use state::{Input, Job, Key, Settings, ViewState};
 
     #[test]
     fn words_are_the_saved_bytes() {
@@ -283,5 +291,94 @@ mod tests {
         assert_eq!(frames[2].rays.primary, 1200);
         let word0 = word(frames[2].film.pixels[0], false);
         assert_eq!(frames[2].pixels[0], word0);
+    }
+
+    /// C shows the heatmap of nodes visited, then of primitives tested, then the image again: the
+    /// window gets the heatmap's colours (legend over its bottom rows) of a counted render whose film
+    /// is the image's.
+    #[test]
+    fn the_heatmap_key_shows_the_counted_costs() {
+        let mut scene = crate::scene::load(std::path::Path::new("scenes/balls_low.p3f")).unwrap();
+        scene.env = None;
+        let options = Options {
+            width: 48,
+            height: 64,
+            ..Options::new(&scene)
+        };
+        let mut view = ViewState::new(
+            &scene,
+            options,
+            Settings::new(AccelKind::Bvh4, Kernel::Packet, DEFAULT_DEPTH),
+        );
+        let plain = view.job();
+        let press = |v: &mut ViewState| {
+            v.input(Input::Key {
+                key: Key::Heatmap,
+                pressed: true,
+            });
+            v.input(Input::Key {
+                key: Key::Heatmap,
+                pressed: false,
+            });
+            v.job()
+        };
+        let nodes = press(&mut view);
+        let prims = press(&mut view);
+        assert_eq!(press(&mut view), plain);
+        assert_eq!(
+            (nodes.heatmap, nodes.options.count_steps),
+            (Some(Measure::Nodes), true)
+        );
+        assert_eq!(
+            (prims.heatmap, plain.heatmap, plain.options.count_steps),
+            (Some(Measure::Prims), None, false)
+        );
+
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let (send, jobs) = mpsc::channel();
+        send.send(Job {
+            progressive: false,
+            ..nodes
+        })
+        .unwrap();
+        let mut send = Some(send);
+        let mut frames = Vec::new();
+        render_loop(&scene, &pool, &jobs, &Signals::default(), false, |frame| {
+            frames.push(frame);
+            // One frame: hanging up ends the thread.
+            send = None;
+            true
+        });
+        let frame = &frames[0];
+        assert!(frame.rays.steps.total().nodes > 0);
+        let accel = Accel::build(Prims::new(&scene), AccelKind::Bvh4);
+        let renderer = Renderer::new(
+            &scene,
+            &accel,
+            Options {
+                spp: 1,
+                count_steps: true,
+                ..options
+            },
+        );
+        let mut sums = Progressive::new(48, 64);
+        sums.render_pass(&renderer, 1, &|| {}, &AtomicBool::new(false))
+            .unwrap();
+        assert_eq!(
+            frame.film,
+            sums.film(),
+            "the image under the heatmap is the render's"
+        );
+        let map = CostKind {
+            measure: Measure::Nodes,
+            rays: None,
+        }
+        .heatmap(48, 64, sums.pixel_rays().unwrap());
+        let [r, g, b] = map.overlaid()[0];
+        assert_eq!(
+            frame.pixels[0],
+            (u32::from(r) << 16) | (u32::from(g) << 8) | u32::from(b)
+        );
+        assert_ne!(frame.pixels[0], word(frame.film.pixels[0], false));
     }
 }

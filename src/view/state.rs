@@ -6,6 +6,7 @@
 use glam::{Quat, Vec3};
 
 use crate::accel::AccelKind;
+use crate::render::cost::Measure;
 use crate::render::{Kernel, Options};
 use crate::scene::{Camera, Scene};
 
@@ -80,6 +81,8 @@ pub enum Key {
     MoreDepth,
     /// P: refine a still camera's image with more passes, or keep its first.
     Progressive,
+    /// C: the cost heatmap: nodes visited, primitives tested, or off, in turn.
+    Heatmap,
 }
 
 /// The keys held down to move or turn, in the order of [`ViewState::held`].
@@ -142,6 +145,8 @@ pub struct Settings {
     pub max_depth: u32,
     /// More passes while the camera stands still.
     pub progressive: bool,
+    /// The cost heatmap shown instead of the image, if any.
+    pub heatmap: Option<Measure>,
 }
 
 impl Settings {
@@ -154,6 +159,7 @@ impl Settings {
             depth_of_field: true,
             max_depth: max_depth.min(MAX_VIEW_DEPTH),
             progressive: true,
+            heatmap: None,
         }
     }
 }
@@ -176,6 +182,8 @@ pub struct Job {
     pub moving: bool,
     /// More passes once the camera stands still.
     pub progressive: bool,
+    /// The cost heatmap shown instead of the image (the render counts steps), if any.
+    pub heatmap: Option<Measure>,
 }
 
 impl Job {
@@ -335,6 +343,13 @@ impl ViewState {
             Key::LessDepth => s.max_depth = s.max_depth.saturating_sub(1),
             Key::MoreDepth => s.max_depth = (s.max_depth + 1).min(MAX_VIEW_DEPTH),
             Key::Progressive => s.progressive = !s.progressive,
+            Key::Heatmap => {
+                s.heatmap = match s.heatmap {
+                    None => Some(Measure::Nodes),
+                    Some(Measure::Nodes) => Some(Measure::Prims),
+                    Some(_) => None,
+                }
+            }
             // Held, not pressed: see `tick`.
             Key::Forward
             | Key::Left
@@ -445,6 +460,7 @@ impl ViewState {
                 max_depth: s.max_depth,
                 kernel: s.kernel,
                 spp: 1,
+                count_steps: s.heatmap.is_some(),
                 ..self.options
             },
             accel: s.accel,
@@ -452,6 +468,7 @@ impl ViewState {
             scale,
             moving,
             progressive: s.progressive,
+            heatmap: s.heatmap,
         }
     }
 

@@ -32,6 +32,7 @@ use super::state::{Input, Job, Key, Settings, ViewState};
 use super::{Config, Frame, Signals, render_loop, reproduce};
 use crate::accel::AccelKind;
 use crate::error::{Error, Result};
+use crate::render::cost::Measure;
 use crate::scene::Scene;
 
 /// How often the camera moves while keys are held: the screen's usual rate.
@@ -360,6 +361,7 @@ fn key_of(code: KeyCode) -> Option<Key> {
         KeyCode::BracketLeft => Key::LessDepth,
         KeyCode::BracketRight => Key::MoreDepth,
         KeyCode::KeyP => Key::Progressive,
+        KeyCode::KeyC => Key::Heatmap,
         _ => return None,
     })
 }
@@ -477,6 +479,13 @@ fn title(name: &str, frame: &Frame, progressive: bool) -> String {
         },
         job.options.max_depth,
     );
+    if let Some(m) = job.heatmap {
+        title.push_str(match m {
+            Measure::Nodes => " | heatmap: nodes visited",
+            Measure::Prims => " | heatmap: primitives tested",
+            Measure::Rays => " | heatmap: rays traced",
+        });
+    }
     if !progressive {
         title.push_str(" | progressive off");
     }

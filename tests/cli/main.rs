@@ -10,6 +10,7 @@ mod common;
 mod cli_checks;
 mod cli_report;
 mod console;
+mod heatmap;
 mod interrupt;
 mod options;
 mod scale_out;

@@ -7,6 +7,7 @@ use clap::Args;
 use crate::cli::frame::{BuildKind, CameraArgs, FrameArgs, spd_refuses, spp};
 use crate::cli::report::Format;
 use crate::cli::values::{non_negative, positive};
+use whitted::render::cost::CostKind;
 
 /// Arguments of `whitted render`.
 #[derive(Args)]
@@ -88,6 +89,13 @@ pub struct ReportArgs {
     /// on stdout. With --spd, also the SPD counts beside the Readme's.
     #[arg(long, value_name = "FORMAT", num_args = 0..=1, require_equals = true, default_missing_value = "text")]
     pub stats: Option<Format>,
+    /// Also write a cost heatmap of the render: `nodes` (BVH nodes visited), `prims` (primitive tests)
+    /// or `rays` (rays traced), summed over every ray each pixel sends, or over one kind of them
+    /// (`nodes:camera`, `prims:shadow`, `rays:reflected`, `nodes:refracted`). Beside the output OUT.EXT:
+    /// OUT.heatmap.png (false colour, with a legend), OUT.heatmap.exr (the counts) and
+    /// OUT.heatmap.json (mean, median, p99 and max per ray kind).
+    #[arg(long, value_name = "KIND")]
+    pub heatmap: Option<CostKind>,
     /// With --stats: also count the nodes visited and primitives tested by each ray, and report their
     /// means per ray kind (counting makes the render slower; its times are the counted render's).
     #[arg(long, requires = "stats")]

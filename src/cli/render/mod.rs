@@ -18,7 +18,7 @@ pub use args::RenderArgs;
 use plan::{Plan, Target};
 use progress::Progress;
 use resume::{done_already, joined, starting_point};
-use write::{check_outputs, write, write_sums};
+use write::{check_outputs, write, write_heatmap, write_sums};
 
 use super::Failure;
 use super::console::note;
@@ -52,6 +52,11 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
     let build_start = Instant::now();
     let accel = pool.install(|| Accel::try_build_with(Prims::new(&scene), plan.accel, plan.build))?;
     let built = build_start.elapsed();
+    if plan.heatmap.is_some() && !accel.counts_steps() {
+        return Err(Failure::Usage(whitted::Error::msg(
+            "Embree's traversal is its own: --heatmap cannot count its steps (choose another --accel)",
+        )));
+    }
     if plan.options.count_steps && !accel.counts_steps() {
         plan.warnings
             .push("Embree's traversal is its own: --counters counts no steps of it".into());
@@ -85,6 +90,9 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
     }
     let rendered = render_start.elapsed();
     write(&plan, &acc).map_err(|e| kept(&plan, &settings, &acc, e))?;
+    if let Some(kind) = plan.heatmap {
+        write_heatmap(&plan, kind, &acc)?;
+    }
     if plan.resume && matches!(plan.target, Target::Image { .. }) {
         // The image is whole: the sums it was resumed from are spent, as is a stop file --resume
         // ignored (the warning said why).

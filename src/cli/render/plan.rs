@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 
 use whitted::accel::{AccelKind, BuildOptions};
 use whitted::parts::partial::PartSettings;
+use whitted::render::cost::CostKind;
 use whitted::render::film::ImageFormat;
 use whitted::render::progressive::Progressive;
 use whitted::render::{Options, tiles};
@@ -40,6 +41,8 @@ pub struct Plan {
     pub target: Target,
     /// Go on from what an interrupted run of the same render wrote (`--resume`).
     pub resume: bool,
+    /// The cost heatmap to write beside the output (`--heatmap`).
+    pub heatmap: Option<CostKind>,
     /// What the arguments asked for that is not done, for the user to see.
     pub warnings: Vec<String>,
     /// No progress bar or summary.
@@ -81,7 +84,7 @@ impl Plan {
             spp,
             seed: args.seed,
             roughness: args.roughness,
-            count_steps: args.report.counters,
+            count_steps: args.report.counters || args.report.heatmap.is_some(),
             ..args.frame.options(scene, depth)
         };
         let options = checked(args.report.spd, options, scene)?;
@@ -99,6 +102,7 @@ impl Plan {
             output: args.output.clone(),
             target,
             resume: args.resume,
+            heatmap: heatmap(args)?,
             warnings,
             quiet: args.quiet,
         })
@@ -180,6 +184,16 @@ fn target(args: &RenderArgs, scene: &Scene, options: &Options) -> whitted::Resul
             snapshots: args.progressive_out.clone(),
         }
     })
+}
+
+/// `--heatmap`, which counts the rays of one run: it cannot go on from an earlier one's sums.
+fn heatmap(args: &RenderArgs) -> whitted::Result<Option<CostKind>> {
+    match args.report.heatmap {
+        Some(_) if args.resume => Err(whitted::Error::msg(
+            "--heatmap counts the rays of one whole run: it cannot go on from an earlier run (--resume)",
+        )),
+        kind => Ok(kind),
+    }
 }
 
 /// `--passes-range`, which must lie within `--passes`.

@@ -1,9 +1,10 @@
 //! What a render writes: the image and its snapshots, or the sums of its passes as a `.partial` file.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use whitted::parts::partial::{Part, PartSettings};
-use whitted::render::film::{Film, check_writable};
+use whitted::render::cost::CostKind;
+use whitted::render::film::{Film, check_writable, write_atomically};
 use whitted::render::progressive::Progressive;
 use whitted::render::{Options, spd};
 
@@ -28,12 +29,36 @@ pub fn check_outputs(args: &RenderArgs) -> Result<(), Failure> {
             )
         })?;
     }
+    if args.report.heatmap.is_some() {
+        for path in heatmap_paths(&args.output) {
+            check_writable(&path)?;
+        }
+    }
     match &args.progressive_out {
         Some(dir) if !partial && args.passes > 1 => {
             Ok(outputs::check_snapshots(dir, &args.output, args.passes)?)
         }
         _ => Ok(()),
     }
+}
+
+/// The files `--heatmap` writes beside `output` (OUT.EXT): OUT.heatmap.png, .exr and .json.
+pub fn heatmap_paths(output: &Path) -> [PathBuf; 3] {
+    ["png", "exr", "json"].map(|ext| output.with_extension(format!("heatmap.{ext}")))
+}
+
+/// Writes the heatmap `kind` of the passes in `acc` beside the output.
+pub fn write_heatmap(plan: &Plan, kind: CostKind, acc: &Progressive) -> whitted::Result<()> {
+    let (w, h) = acc.size();
+    let pixels = acc.pixel_rays().expect("a heatmap's render counts its steps");
+    let [png, exr, json] = heatmap_paths(&plan.output);
+    let map = kind.heatmap(w, h, pixels);
+    map.write_png(&png)?;
+    map.write_exr(&exr)?;
+    let mut text = serde_json::to_string_pretty(&kind.summary(w, h, pixels)).expect("JSON of plain values");
+    text.push('\n');
+    write_atomically(&json, |tmp| std::fs::write(tmp, &text).map_err(|e| e.to_string()))
+        .map_err(|e| whitted::Error::file(&json, e))
 }
 
 /// Writes the sums or the mean so far to the output and, with `--progressive-out`, a numbered copy.

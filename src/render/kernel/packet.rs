@@ -18,7 +18,9 @@ use crate::geometry::ray::Ray;
 use crate::render::renderer::Renderer;
 use crate::render::sampler::PixelPattern;
 use crate::render::tiles::{TILE, Tile};
-use crate::render::whitted::{Bounces, PixelSample, RayCounts, RayKind, ShadowRay, Whitted};
+use crate::render::whitted::{
+    Bounces, PixelSample, RayCounts, RayKind, ShadowRay, Whitted, charge, take_steps,
+};
 
 /// Light samples whose shadow rays are traced as packets (one bit each in a lane's mask); the shading
 /// asks for any more ray by ray.
@@ -39,14 +41,7 @@ impl Whitted<'_> {
     ) -> PerRay<Vec3> {
         let mut hits = [Hit::miss(f32::INFINITY); PACKET];
         let hit = if self.counts() {
-            let hit = self
-                .accel
-                .counting()
-                .intersect_packet(rays, active, 0.0, &mut hits);
-            for k in bits(active) {
-                *samples[k].rays.steps.of(kind) += counters::lane(k);
-            }
-            hit
+            closest_counted(self, rays, active, kind, samples, &mut hits)
         } else {
             self.accel.intersect_packet(rays, active, 0.0, &mut hits)
         };
@@ -100,7 +95,9 @@ impl Whitted<'_> {
                 ),
             };
             samples[k].rays.shadow += extra_shadows;
-            samples[k].rays.steps.shadow += steps;
+            if self.counts() {
+                charge(samples[k].slot, RayKind::Shadow, steps);
+            }
         }
         out
     }
@@ -153,11 +150,7 @@ impl Whitted<'_> {
                     samples[k].rays.shadow += 1;
                 }
                 let hit = if self.counts() {
-                    let hit = self.accel.counting().occluded_packet(&rays, active, 0.0, &t_max);
-                    for k in bits(active) {
-                        samples[k].rays.steps.shadow += counters::lane(k);
-                    }
-                    hit
+                    blocked_counted(self, &rays, active, &t_max, samples)
                 } else {
                     self.accel.occluded_packet(&rays, active, 0.0, &t_max)
                 };
@@ -170,16 +163,54 @@ impl Whitted<'_> {
     }
 }
 
+/// [`Whitted::shade_packet`]'s closest hits, counted into each lane's sample as rays of `kind`: out
+/// of the way of the plain path.
+#[cold]
+#[inline(never)]
+fn closest_counted(
+    whitted: &Whitted,
+    rays: &PerRay<Ray>,
+    active: u8,
+    kind: RayKind,
+    samples: &PerRay<PixelSample>,
+    hits: &mut PerRay<Hit>,
+) -> u8 {
+    let hit = whitted.accel.counting().intersect_packet(rays, active, 0.0, hits);
+    for k in bits(active) {
+        charge(samples[k].slot, kind, counters::lane(k));
+    }
+    hit
+}
+
+/// A packet of shadow rays, counted into each lane's sample.
+#[cold]
+#[inline(never)]
+fn blocked_counted(
+    whitted: &Whitted,
+    rays: &PerRay<Ray>,
+    active: u8,
+    t_max: &[f32; PACKET],
+    samples: &PerRay<PixelSample>,
+) -> u8 {
+    let hit = whitted.accel.counting().occluded_packet(rays, active, 0.0, t_max);
+    for k in bits(active) {
+        charge(samples[k].slot, RayKind::Shadow, counters::lane(k));
+    }
+    hit
+}
+
 impl Renderer<'_> {
     /// Shades `tile` for pass `pass`, packet by packet (pixels outside the image are inactive lanes),
     /// into `buf`: sample `s` of eight pixels at a time, each lane with its pixel's own pattern and
-    /// random numbers, summed per pixel in sample order as the single-ray path sums them.
+    /// random numbers, summed per pixel in sample order as the single-ray path sums them; given
+    /// `pixels`, each pixel's rays are counted into its own (row by row, [`TILE`] a row).
     pub(in crate::render) fn tile_packets(
         &self,
         tile: Tile,
         pass: u32,
         buf: &mut TilePixels,
         rays_traced: &mut RayCounts,
+        mut pixels: Option<&mut [RayCounts]>,
     ) {
         let mut patterns: PerRay<PixelPattern> = Default::default();
         for y0 in (tile.y0..tile.y1).step_by(BLOCK_H as usize) {
@@ -203,7 +234,10 @@ impl Renderer<'_> {
                         }
                         let (ray, sample) = self.camera_sample(x, y, pass, s, &patterns[k]);
                         rays[k] = ray;
-                        sample
+                        PixelSample {
+                            slot: k as u32,
+                            ..sample
+                        }
                     });
                     let colors = self
                         .whitted
@@ -212,6 +246,14 @@ impl Renderer<'_> {
                         sums[k] += colors[k];
                         samples[k].rays.primary += 1;
                         *rays_traced += samples[k].rays;
+                        if let Some(p) = pixels.as_deref_mut() {
+                            let (x, y) = pixel(k);
+                            let steps = take_steps(k as u32);
+                            rays_traced.steps += steps;
+                            let p = &mut p[((y - tile.y0) * TILE + (x - tile.x0)) as usize];
+                            *p += samples[k].rays;
+                            p.steps += steps;
+                        }
                     }
                 }
                 for k in bits(active) {

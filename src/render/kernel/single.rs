@@ -8,22 +8,29 @@ use super::TilePixels;
 use crate::render::renderer::Renderer;
 use crate::render::sampler::PixelPattern;
 use crate::render::tiles::{TILE, Tile};
-use crate::render::whitted::{RayCounts, RayKind};
+use crate::render::whitted::{RayCounts, RayKind, take_steps};
 
 impl Renderer<'_> {
-    /// Shades `tile` for pass `pass` pixel by pixel into `buf`, counting the rays into `rays`.
+    /// Shades `tile` for pass `pass` pixel by pixel into `buf`, counting the rays into `rays` and,
+    /// given `pixels`, each pixel's into its own (row by row, [`TILE`] a row).
     pub(in crate::render) fn tile_single(
         &self,
         tile: Tile,
         pass: u32,
         buf: &mut TilePixels,
         rays: &mut RayCounts,
+        mut pixels: Option<&mut [RayCounts]>,
     ) {
         let mut pattern = PixelPattern::default();
         for y in tile.y0..tile.y1 {
             for x in tile.x0..tile.x1 {
-                buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] =
-                    self.pixel_in_pass(x, y, pass, &mut pattern, rays);
+                let i = ((y - tile.y0) * TILE + (x - tile.x0)) as usize;
+                let mut mine = RayCounts::default();
+                buf[i] = self.pixel_in_pass(x, y, pass, &mut pattern, &mut mine);
+                *rays += mine;
+                if let Some(p) = pixels.as_deref_mut() {
+                    p[i] = mine;
+                }
             }
         }
     }
@@ -45,6 +52,9 @@ impl Renderer<'_> {
             sum += self.whitted.trace(&ray, 0, RayKind::Camera, &mut sample);
             sample.rays.primary += 1;
             *rays += sample.rays;
+            if self.whitted.counts() {
+                rays.steps += take_steps(sample.slot);
+            }
         }
         sum / self.samples() as f32
     }

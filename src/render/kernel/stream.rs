@@ -26,7 +26,7 @@ use crate::geometry::ray::Ray;
 use crate::render::renderer::Renderer;
 use crate::render::sampler::PixelPattern;
 use crate::render::tiles::{TILE, Tile};
-use crate::render::whitted::{Bounces, PixelSample, RayCounts, RayKind, ShadowRay};
+use crate::render::whitted::{Bounces, PixelSample, RayCounts, RayKind, ShadowRay, charge, take_steps};
 
 /// The most pixel samples in flight at once: past this (many samples per pixel), a set of tiles is
 /// traced in batches of whole pixels' samples, so that a worker's state stays bounded (about 130 bytes
@@ -115,18 +115,20 @@ impl StreamBuffers {
 
 impl Renderer<'_> {
     /// Renders `tiles` for pass `pass` as streams into `bufs` (one per tile) and counts each tile's
-    /// rays into `counts`, with the calling worker's buffers, kept from job to job.
+    /// rays into `counts` and, unless `pixel_rays` is empty, each pixel's into its own (tile by tile,
+    /// [`TILE`] x [`TILE`] each), with the calling worker's buffers, kept from job to job.
     pub(in crate::render) fn tiles_streamed(
         &self,
         tiles: &[Tile],
         pass: u32,
         bufs: &mut [TilePixels],
         counts: &mut [RayCounts],
+        pixel_rays: &mut [RayCounts],
     ) {
         thread_local! {
             static BUFFERS: RefCell<StreamBuffers> = RefCell::default();
         }
-        BUFFERS.with_borrow_mut(|b| self.trace_tiles(tiles, pass, bufs, counts, b));
+        BUFFERS.with_borrow_mut(|b| self.trace_tiles(tiles, pass, bufs, counts, pixel_rays, b));
     }
 
     /// [`Renderer::tiles_streamed`] with the buffers `b`.
@@ -136,6 +138,7 @@ impl Renderer<'_> {
         pass: u32,
         bufs: &mut [TilePixels],
         counts: &mut [RayCounts],
+        pixel_rays: &mut [RayCounts],
         b: &mut StreamBuffers,
     ) {
         let samples = self.samples() as usize;
@@ -171,7 +174,7 @@ impl Renderer<'_> {
                     let (ray, sample) = self.camera_sample(x, y, pass, s, &pattern);
                     let id = walks.len() as u32;
                     walks.push(Walk {
-                        sample,
+                        sample: PixelSample { slot: id, ..sample },
                         tile: t,
                         pixel,
                         color: Vec3::ZERO,
@@ -188,6 +191,12 @@ impl Renderer<'_> {
                     sum += w.color;
                     w.sample.rays.primary += 1;
                     counts[w.tile as usize] += w.sample.rays;
+                    if let Some(p) = pixel_rays.get_mut((w.tile * TILE * TILE + w.pixel) as usize) {
+                        let steps = take_steps(w.sample.slot);
+                        counts[w.tile as usize].steps += steps;
+                        *p += w.sample.rays;
+                        p.steps += steps;
+                    }
                 }
                 bufs[pixel[0].tile as usize][pixel[0].pixel as usize] = sum / samples as f32;
             }
@@ -217,7 +226,7 @@ impl Renderer<'_> {
                         0 => RayKind::Camera,
                         _ => RayKind::secondary(node.slot as usize),
                     };
-                    *walks[node.sample as usize].sample.rays.steps.of(kind) += b.steps[j];
+                    charge(walks[node.sample as usize].sample.slot, kind, b.steps[j]);
                 }
             }
             // Each hit's surface, bounces (in each sample's single-ray order: one ray a sample) and
@@ -255,7 +264,7 @@ impl Renderer<'_> {
             self.trace_split::<true>(b, start);
             if whitted.counts() {
                 for (j, &owner) in b.shadow_owner.iter().enumerate() {
-                    walks[owner as usize].sample.rays.steps.shadow += b.steps[j];
+                    charge(walks[owner as usize].sample.slot, RayKind::Shadow, b.steps[j]);
                 }
             }
             // Each sample's next ray, or its finished rays' colours, up its tree.
