@@ -75,16 +75,6 @@ pub fn nodes<P: HitPolicy>(mut mask: u32) {
     }
 }
 
-/// One inner node visited by each of the rays `lanes`.
-#[inline(always)]
-pub fn nodes_of<P: HitPolicy>(lanes: impl IntoIterator<Item = usize>) {
-    if P::COUNT {
-        for k in lanes {
-            add(k, 1, 0);
-        }
-    }
-}
-
 /// `n` primitives tested by the current lane's ray.
 #[inline(always)]
 pub fn prims<P: HitPolicy>(n: usize) {
