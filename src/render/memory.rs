@@ -8,25 +8,41 @@ use std::fmt::Write;
 /// of their mean (12), the 8-bit image (3) and the encoder's copy of it (3).
 pub const BYTES_PER_PIXEL: u64 = 42;
 
-/// The bytes a `width` × `height` frame needs at its peak.
-pub fn frame_bytes(width: u32, height: u32) -> u64 {
-    u64::from(width) * u64::from(height) * BYTES_PER_PIXEL
+/// Bytes a pixel takes more when the render counts steps ([`super::Options::count_steps`]): its rays
+/// and steps in the pass (104) and summed over the passes over the whole frame, even for a part (104),
+/// and a heatmap's counts (4), image (3) and raw film with the encoder's copy (24).
+pub const COUNTED_BYTES_PER_PIXEL: u64 = 239;
+
+/// The bytes a pixel needs, counting steps or not.
+fn per_pixel(counted: bool) -> u64 {
+    BYTES_PER_PIXEL + if counted { COUNTED_BYTES_PER_PIXEL } else { 0 }
+}
+
+/// The bytes a `width` × `height` frame needs at its peak, counting steps or not.
+pub fn frame_bytes(width: u32, height: u32, counted: bool) -> u64 {
+    u64::from(width) * u64::from(height) * per_pixel(counted)
 }
 
 /// Refuses a frame that needs more memory than this process can still use ([`available`]); a
 /// frame whose need cannot be compared (no figure to read) is let through.
-pub fn check(width: u32, height: u32) -> Result<(), String> {
-    check_against(width, height, available())
+pub fn check(width: u32, height: u32, counted: bool) -> Result<(), String> {
+    check_against(width, height, counted, available())
 }
 
 /// [`check`] against `available` bytes.
-pub fn check_against(width: u32, height: u32, available: Option<u64>) -> Result<(), String> {
-    let need = frame_bytes(width, height);
+pub fn check_against(width: u32, height: u32, counted: bool, available: Option<u64>) -> Result<(), String> {
+    let need = frame_bytes(width, height, counted);
+    let (what, instead) = if counted {
+        (", counting steps", "leave out --counters and --heatmap")
+    } else {
+        ("", "render it in parts (--tiles K/N)")
+    };
     match available {
         Some(have) if need > have => Err(format!(
-            "a {width}x{height} frame needs {} ({BYTES_PER_PIXEL} bytes a pixel) and only {} is \
-             available: lower the resolution, or render it in parts (--tiles K/N)",
+            "a {width}x{height} frame needs {} ({} bytes a pixel{what}) and only {} is available: lower \
+             the resolution, or {instead}",
             gib(need),
+            per_pixel(counted),
             gib(have)
         )),
         _ => Ok(()),
@@ -87,15 +103,23 @@ mod tests {
     #[test]
     fn refuses_a_frame_larger_than_what_is_available_with_both_sizes() {
         // 16384 x 16384 x 42 bytes = 10.5 GiB exactly.
-        assert_eq!(frame_bytes(16384, 16384), 11_274_289_152);
+        assert_eq!(frame_bytes(16384, 16384, false), 11_274_289_152);
         assert_eq!(
-            check_against(16384, 16384, Some(4 << 30)).unwrap_err(),
+            check_against(16384, 16384, false, Some(4 << 30)).unwrap_err(),
             "a 16384x16384 frame needs 10.50 GiB (42 bytes a pixel) and only 4.00 GiB is available: \
              lower the resolution, or render it in parts (--tiles K/N)"
         );
-        assert!(check_against(16384, 16384, Some(11_274_289_152)).is_ok());
-        assert!(check_against(16384, 16384, None).is_ok());
-        assert!(check_against(1920, 1080, Some(1 << 30)).is_ok());
+        assert!(check_against(16384, 16384, false, Some(11_274_289_152)).is_ok());
+        assert!(check_against(16384, 16384, false, None).is_ok());
+        assert!(check_against(1920, 1080, false, Some(1 << 30)).is_ok());
+        // Counting steps: 42 + 239 = 281 bytes a pixel; 4096 x 4096 of them is 4.39 GiB.
+        assert_eq!(frame_bytes(4096, 4096, true), 4096 * 4096 * 281);
+        assert_eq!(
+            check_against(4096, 4096, true, Some(4 << 30)).unwrap_err(),
+            "a 4096x4096 frame needs 4.39 GiB (281 bytes a pixel, counting steps) and only 4.00 GiB is \
+             available: lower the resolution, or leave out --counters and --heatmap"
+        );
+        assert!(check_against(4096, 4096, false, Some(4 << 30)).is_ok());
     }
 
     #[test]

@@ -79,7 +79,7 @@ fn a_bad_output_is_refused_before_the_scene_is_loaded() {
 
 /// Under `ulimit -v 4000000` (about 3.8 GiB of address space) a 16384 x 16384 frame, which needs 10.5
 /// GiB at 42 bytes a pixel, is refused with both sizes before anything is allocated: exit status 1, not
-/// an abort, and no output.
+/// an abort, and no output; so is a counting render's larger need, even for a part.
 #[cfg(target_os = "linux")]
 #[test]
 fn a_frame_larger_than_the_memory_limit_is_refused_with_both_sizes() {
@@ -111,6 +111,37 @@ fn a_frame_larger_than_the_memory_limit_is_refused_with_both_sizes() {
     assert!(available > 0.0 && available < 3.82, "{err}");
     assert!(!out.exists());
     assert!(!Path::new(&format!("{}.partial", out.display())).exists());
+
+    // Counting steps (a heatmap) spans the whole frame even for a part: 4096 x 4096 at 281 bytes a
+    // pixel (4.39 GiB) is refused under the same limit, part or not, before anything is written.
+    let part = dir.path().join("part.partial");
+    let run = Command::new("sh")
+        .args(["-c", "ulimit -v 4000000 && exec \"$0\" \"$@\""])
+        .arg(env!("CARGO_BIN_EXE_whitted"))
+        .args([
+            "render",
+            "--width",
+            "4096",
+            "--height",
+            "4096",
+            "--tiles",
+            "0/64",
+            "--heatmap",
+            "nodes",
+        ])
+        .arg("-o")
+        .arg(&part)
+        .output()
+        .unwrap();
+    let err = common::failed(&run, 1);
+    let prefix = "whitted: a 4096x4096 frame needs 4.39 GiB (281 bytes a pixel, counting steps) and only ";
+    let suffix = " GiB is available: lower the resolution, or leave out --counters and --heatmap\n";
+    assert!(err.starts_with(prefix) && err.ends_with(suffix), "{err}");
+    assert_eq!(
+        std::fs::read_dir(dir.path()).unwrap().count(),
+        1,
+        "only the scene file"
+    );
 }
 
 /// Issue 34, cases 7, 8 and 9: every file a render may write is checked before the scene is loaded,

@@ -43,9 +43,12 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
     let mut scene = load_scene(args.scene.as_deref())?;
     warn(&scene.warnings);
     let mut plan = Plan::new(args, &mut scene).map_err(Failure::Usage)?;
-    // A part's sums cover its tiles only; a whole frame is refused here rather than aborted later.
-    if plan.tiles.is_none() {
-        memory::check(plan.options.width, plan.options.height).map_err(whitted::Error::msg)?;
+    // A part's sums cover its tiles only; a whole frame is refused here rather than aborted later, and
+    // so is any counting render (its pixels' rays and heatmap span the frame, even for a part).
+    let counted = plan.options.count_steps;
+    if plan.tiles.is_none() || counted {
+        let (w, h) = (plan.options.width, plan.options.height);
+        memory::check(w, h, counted).map_err(whitted::Error::msg)?;
     }
     let pool = thread_pool(plan.threads)?;
     let loaded = start.elapsed();
