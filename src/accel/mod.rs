@@ -16,6 +16,7 @@ pub mod packet;
 pub mod pages;
 pub mod policy;
 pub mod prims;
+pub mod quality;
 pub mod stack;
 pub mod structure;
 pub mod wide;

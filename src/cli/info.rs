@@ -7,10 +7,12 @@ use clap::Args;
 use glam::Vec3;
 use serde_json::{Map, Value, json};
 use whitted::accel::bvh2::Stats;
+use whitted::accel::quality::TreeView;
 use whitted::accel::{Accel, AccelKind, Prims};
 use whitted::render::spd::{self, Counts};
 use whitted::scene::{self, Scene};
 
+use super::Failure;
 use super::console;
 use super::frame::{BuildKind, build_options};
 use super::report::{accel_name, image_size, simd_name};
@@ -38,10 +40,25 @@ pub struct InfoArgs {
     /// ray counts for the scene's file name. Nothing is rendered: `render --spd --stats` counts ours.
     #[arg(long)]
     spd: bool,
+    /// With a BVH (`--accel bvh2`, `bvh4` or `bvh8`): also its end-point overlap (EPO; Aila, Karras
+    /// and Laine 2013), the surface of other subtrees' triangles inside each node's box, weighted as
+    /// SAH: the other half of a tree's quality (seconds on a large mesh).
+    #[arg(long, requires = "accel")]
+    epo: bool,
 }
 
 /// Loads the scene and prints its summary.
-pub fn run(args: &InfoArgs) -> whitted::Result<()> {
+pub fn run(args: &InfoArgs) -> Result<(), Failure> {
+    if args.epo
+        && !matches!(
+            args.accel,
+            Some(AccelKind::Bvh2 | AccelKind::Bvh4 | AccelKind::Bvh8)
+        )
+    {
+        return Err(Failure::Usage(whitted::Error::msg(
+            "--epo measures a BVH: it needs --accel bvh2, bvh4 or bvh8",
+        )));
+    }
     let start = Instant::now();
     let scene = scene::load(&args.scene)?;
     let load_s = start.elapsed().as_secs_f64();
@@ -60,7 +77,14 @@ pub fn run(args: &InfoArgs) -> whitted::Result<()> {
         let mut out = json(&args.scene, &scene, load_s);
         if let Some((build_s, accel)) = &built {
             out.insert("build_s".into(), (*build_s).into());
-            out.insert("accel".into(), accel_json(accel));
+            let mut shape = accel_json(accel);
+            if let (Some(view), Value::Object(map)) = (tree_view(accel), &mut shape) {
+                map.insert("leaf_depths".into(), view.leaf_depths().into());
+                if args.epo {
+                    map.insert("epo_cost".into(), view.epo(&accel.prims()).into());
+                }
+            }
+            out.insert("accel".into(), shape);
         }
         if let Some(readme) = readme {
             out.insert("spd".into(), spd_json(&scene, readme.as_ref()));
@@ -73,6 +97,17 @@ pub fn run(args: &InfoArgs) -> whitted::Result<()> {
                 "accelerator   {}\nbuild time    {build_s:.3} s\n",
                 accel.describe()
             );
+            if let Some(view) = tree_view(&accel) {
+                let depths = view.leaf_depths();
+                let listed: Vec<String> = (0..depths.len())
+                    .filter(|&d| depths[d] > 0)
+                    .map(|d| format!("{d}:{}", depths[d]))
+                    .collect();
+                page += &format!("leaf depths   {}\n", listed.join(" "));
+                if args.epo {
+                    page += &format!("EPO cost      {:.2}\n", view.epo(&accel.prims()));
+                }
+            }
         }
         if let Some(readme) = readme {
             page += &spd_text(&scene, readme.as_ref());
@@ -80,6 +115,16 @@ pub fn run(args: &InfoArgs) -> whitted::Result<()> {
         console::out(page)?;
     }
     Ok(())
+}
+
+/// A BVH as [`whitted::accel::quality`] reads it; `None` for the other structures.
+fn tree_view(accel: &Accel) -> Option<TreeView> {
+    match accel {
+        Accel::Bvh2(b) => Some(TreeView::from(b)),
+        Accel::Bvh4(b) => Some(TreeView::from(b)),
+        Accel::Bvh8(b) => Some(TreeView::from(b)),
+        _ => None,
+    }
 }
 
 /// The counts printed first, as (JSON key, value).

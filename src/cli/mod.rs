@@ -91,7 +91,7 @@ pub fn main() -> ExitCode {
     };
     let done = |result: Result<(), Failure>| result.map(|()| Ended::Done);
     let result = match cli.command {
-        Command::Info(args) => done(info::run(&args).map_err(Failure::from)),
+        Command::Info(args) => done(info::run(&args)),
         Command::Render(args) => render::run(&args),
         Command::Bench(args) => done(bench::run(&args)),
         Command::Merge(args) => done(merge::run(&args).map_err(Failure::from)),

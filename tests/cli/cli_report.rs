@@ -132,6 +132,7 @@ fn info_json_with_a_bvh_gives_the_trees_shape() {
             "depth",
             "leaf_sizes",
             "sah_cost",
+            "leaf_depths",
         ];
         assert_eq!(keys(a), set(&documented), "{kind}");
         assert_eq!(a["kind"], kind);
@@ -166,7 +167,36 @@ fn info_json_with_a_bvh_gives_the_trees_shape() {
             sah > 1.0 && sah <= (nodes - leaves) as f64 + 4096.0,
             "{kind}: {sah}"
         );
+        // Leaves by depth below the root: all of them, the deepest at the tree's depth.
+        let depths: Vec<u64> = a["leaf_depths"].as_array().unwrap().iter().map(int).collect();
+        assert_eq!(depths.iter().sum::<u64>(), leaves, "{kind}");
+        assert_eq!(depths.len() as u64, depth, "{kind}");
+        // --epo adds the end-point overlap; it asks for a BVH (usage errors otherwise).
+        let v = json(&[
+            "info",
+            "--json",
+            "--accel",
+            kind,
+            "--epo",
+            "scenes/spd/tetra_default.nff",
+        ]);
+        let epo = float(&v["accel"]["epo_cost"]);
+        assert!(epo.is_finite() && epo >= 0.0, "{kind}: {epo}");
+        let text = stdout(&["info", "--accel", kind, "--epo", "scenes/spd/tetra_default.nff"]);
+        assert!(
+            text.contains("\nleaf depths   ") && text.contains("\nEPO cost      "),
+            "{text}"
+        );
     }
+    let err = common::fails(
+        &["info", "--accel", "grid", "--epo", "scenes/spd/tetra_default.nff"],
+        2,
+    );
+    assert_eq!(
+        err,
+        "whitted: --epo measures a BVH: it needs --accel bvh2, bvh4 or bvh8\n"
+    );
+    common::fails(&["info", "--epo", "scenes/spd/tetra_default.nff"], 2);
 }
 
 #[test]
