@@ -134,7 +134,7 @@ impl Report {
         };
         out += &format!("{rays:<13}{:>12} {:>10}{steps}\n", "count", "Mrays/s");
         let r = &self.rays;
-        for ((kind, count), (_, s)) in by_kind(r).zip(steps_by_kind(r)) {
+        for (kind, count, s) in by_kind(r) {
             let steps = if counted {
                 let (nodes, prims) = per_ray(s, count);
                 format!(" {nodes:>10.2} {prims:>10.2}")
@@ -156,10 +156,10 @@ impl Report {
     pub fn json(&self) -> Map<String, Value> {
         let (w, h) = self.size();
         let r = &self.rays;
-        let mut rays: Map<String, Value> = by_kind(r).map(|(k, n)| (k.into(), n.into())).collect();
+        let mut rays: Map<String, Value> = by_kind(r).map(|(k, n, _)| (k.into(), n.into())).collect();
         rays.shift_insert(1, "primary_hits".into(), r.primary_hits.into());
         let rates: Map<String, Value> = by_kind(r)
-            .map(|(k, n)| (k.into(), self.mrays(n).into()))
+            .map(|(k, n, _)| (k.into(), self.mrays(n).into()))
             .collect();
         let [load, build, render] = self.times;
         let mut out = match json!({
@@ -187,8 +187,7 @@ impl Report {
         out.insert("mrays_per_s_by_kind".into(), rates.into());
         if self.options.count_steps {
             let steps: Map<String, Value> = by_kind(r)
-                .zip(steps_by_kind(r))
-                .map(|((k, n), (_, s))| {
+                .map(|(k, n, s)| {
                     let (nodes, prims) = per_ray(s, n);
                     (k.into(), json!({"nodes": nodes, "prims": prims}))
                 })
@@ -200,19 +199,6 @@ impl Report {
         }
         out
     }
-}
-
-/// The steps of each kind of [`by_kind`], in its order.
-fn steps_by_kind(r: &RayCounts) -> impl Iterator<Item = (&'static str, Steps)> {
-    let s = &r.steps;
-    [
-        ("primary", s.camera),
-        ("shadow", s.shadow),
-        ("reflected", s.reflected),
-        ("refracted", s.refracted),
-        ("total", s.total()),
-    ]
-    .into_iter()
 }
 
 /// Mean nodes visited and primitives tested per ray of `rays` rays (0 without rays).
@@ -260,14 +246,16 @@ fn rays_key(per_frame: bool) -> &'static str {
     if per_frame { "rays_per_frame" } else { "rays" }
 }
 
-/// The rays by kind, then all of them (the primary hits are primary rays, not a kind of their own).
-fn by_kind(r: &RayCounts) -> impl Iterator<Item = (&'static str, u64)> {
+/// The rays by kind, then all of them (the primary hits are primary rays, not a kind of their own),
+/// each with their steps (zero unless the render counted them).
+fn by_kind(r: &RayCounts) -> impl Iterator<Item = (&'static str, u64, Steps)> {
+    let s = &r.steps;
     [
-        ("primary", r.primary),
-        ("shadow", r.shadow),
-        ("reflected", r.reflected),
-        ("refracted", r.refracted),
-        ("total", r.total()),
+        ("primary", r.primary, s.camera),
+        ("shadow", r.shadow, s.shadow),
+        ("reflected", r.reflected, s.reflected),
+        ("refracted", r.refracted, s.refracted),
+        ("total", r.total(), s.total()),
     ]
     .into_iter()
 }

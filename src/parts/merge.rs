@@ -205,18 +205,7 @@ mod tests {
     /// Part `part` of a 40 x 20 frame of 4 passes, holding `tiles` (whose areas are 256, 256, 128,
     /// 64, 64 and 32 pixels) over `passes`.
     fn part(part: (u32, u32), tiles: &[u32], passes: Range<u32>) -> Part {
-        let settings = PartSettings {
-            scene: 7,
-            width: 40,
-            height: 20,
-            spp: 1,
-            seed: 3,
-            max_depth: 6,
-            aperture: 0.0,
-            focal: 1.0,
-            roughness: 0.0,
-            passes: 4,
-        };
+        let settings = PartSettings::for_tests(40, 20);
         let area = [256, 256, 128, 64, 64, 32];
         let pixels: usize = tiles.iter().map(|&t| area[t as usize]).sum();
         Part {

@@ -127,6 +127,25 @@ impl PartSettings {
     }
 }
 
+#[cfg(test)]
+impl PartSettings {
+    /// The settings of a `width` × `height` test render of 4 passes (scene fingerprint 7, seed 3).
+    pub(crate) fn for_tests(width: u32, height: u32) -> Self {
+        PartSettings {
+            scene: 7,
+            width,
+            height,
+            spp: 1,
+            seed: 3,
+            max_depth: 6,
+            aperture: 0.0,
+            focal: 1.0,
+            roughness: 0.0,
+            passes: 4,
+        }
+    }
+}
+
 /// A part of a frame: some of its tiles over some of its passes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Part {
@@ -452,18 +471,7 @@ mod tests {
     use glam::Vec3;
 
     fn part() -> Part {
-        let settings = PartSettings {
-            scene: 7,
-            width: 20,
-            height: 18,
-            spp: 1,
-            seed: 3,
-            max_depth: 6,
-            aperture: 0.0,
-            focal: 1.0,
-            roughness: 0.0,
-            passes: 4,
-        };
+        let settings = PartSettings::for_tests(20, 18);
         let tiles = vec![1, 2];
         // A 20x18 frame has tiles of 16x16, 4x16, 16x2 and 4x2 pixels.
         let pixels = 4 * 16 + 16 * 2;

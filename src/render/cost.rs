@@ -65,7 +65,7 @@ impl FromStr for CostKind {
 impl CostKind {
     /// The count of `r`, a pixel's rays.
     pub fn of(&self, r: &RayCounts) -> u64 {
-        let mut steps = r.steps;
+        let steps = &r.steps;
         let count = |kind: RayKind| match kind {
             RayKind::Camera => r.primary,
             RayKind::Shadow => r.shadow,
@@ -76,8 +76,8 @@ impl CostKind {
             (Measure::Nodes, None) => steps.total().nodes,
             (Measure::Prims, None) => steps.total().prims,
             (Measure::Rays, None) => r.total(),
-            (Measure::Nodes, Some(k)) => steps.of(k).nodes,
-            (Measure::Prims, Some(k)) => steps.of(k).prims,
+            (Measure::Nodes, Some(k)) => steps.get(k).nodes,
+            (Measure::Prims, Some(k)) => steps.get(k).prims,
             (Measure::Rays, Some(k)) => count(k),
         }
     }

@@ -105,18 +105,41 @@ impl Film {
 
     /// 8-bit RGB PNG with its colour space recorded.
     fn write_png(&self, out: impl std::io::Write, srgb: bool) -> std::result::Result<(), png::EncodingError> {
-        let mut encoder = png::Encoder::new(out, self.width, self.height);
-        encoder.set_color(png::ColorType::Rgb);
-        encoder.set_depth(png::BitDepth::Eight);
-        if srgb {
-            encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-        } else {
-            encoder.set_source_gamma(png::ScaledFloat::new(1.0));
-        }
-        let mut writer = encoder.write_header()?;
-        writer.write_image_data(&self.to_rgb8(srgb))?;
-        writer.finish()
+        encode_png(out, self.width, self.height, &self.to_rgb8(srgb), srgb)
     }
+}
+
+/// Writes `rgb` (8-bit RGB bytes of a `width` × `height` image, row-major) as a PNG, atomically
+/// ([`write_atomically`]), its colour space recorded as [`Film::write`] records it: for images made
+/// as bytes (a heatmap's colours), which need no film.
+pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8], srgb: bool) -> Result<()> {
+    write_atomically(path, |tmp| {
+        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+        encode_png(std::io::BufWriter::new(file), width, height, rgb, srgb).map_err(|e| e.to_string())
+    })
+    .map_err(|e| Error::file(path, format!("cannot write the image: {e}")))
+}
+
+/// `rgb` as an 8-bit RGB PNG with its colour space: an sRGB chunk with `srgb`, else a gAMA chunk of
+/// 1.0 (linear values).
+fn encode_png(
+    out: impl std::io::Write,
+    width: u32,
+    height: u32,
+    rgb: &[u8],
+    srgb: bool,
+) -> std::result::Result<(), png::EncodingError> {
+    let mut encoder = png::Encoder::new(out, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    if srgb {
+        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+    } else {
+        encoder.set_source_gamma(png::ScaledFloat::new(1.0));
+    }
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(rgb)?;
+    writer.finish()
 }
 
 /// JPEG quality (of 100): high enough that the 8-bit rounding, not the codec, dominates the error.

@@ -14,7 +14,7 @@ use std::path::Path;
 use glam::Vec3;
 
 use crate::error::{Error, Result};
-use crate::render::film::{Film, ImageFormat};
+use crate::render::film::{Film, ImageFormat, write_png_rgb8};
 
 /// Viridis at `t` (0 the bottom of the map, 1 the top; clamped, NaN is 0), as sRGB bytes.
 pub fn viridis(t: f32) -> [u8; 3] {
@@ -81,22 +81,11 @@ impl Heatmap {
     /// top; non-finite and negative values count as 0) with a legend strip below it: the colour ramp,
     /// ticks and numbers at 0, 1/4, 1/2, 3/4 and the maximum, and [`Heatmap::what`]. An image too
     /// narrow for the legend is centred on a wider canvas. `path` must name a `.png` file; it is
-    /// written atomically, with an sRGB chunk (viridis's colours are sRGB), by the film's writer.
+    /// written atomically, with an sRGB chunk (viridis's colours are sRGB), by the film's PNG writer.
     pub fn write_png(&self, path: &Path) -> Result<()> {
         self.check(path, ImageFormat::Png, "png")?;
         let (width, height, rgb) = self.to_rgb8();
-        // The film's PNG writer encodes linear values to sRGB bytes: decode viridis's bytes so that it
-        // writes them back unchanged (exact for all 256, `srgb_round_trip_is_exact`).
-        let lut: Vec<f32> = (0..=255u8).map(srgb_decode).collect();
-        let film = Film {
-            width,
-            height,
-            pixels: rgb
-                .iter()
-                .map(|p| Vec3::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
-                .collect(),
-        };
-        film.write(path, true)
+        write_png_rgb8(path, width, height, rgb.as_flattened(), true)
     }
 
     /// Writes the raw values as a 32-bit float EXR, the value in all three channels, atomically:
@@ -263,17 +252,6 @@ impl Canvas {
     }
 }
 
-/// The sRGB byte `b` as a linear value (IEC 61966-2-1), the inverse of [`super::film::srgb_encode`].
-fn srgb_decode(b: u8) -> f32 {
-    let c = f64::from(b) / 255.0;
-    let linear = if c <= 0.040_45 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    };
-    linear as f32
-}
-
 /// A legend number: an integer as one; otherwise rounded to 3 decimals, or to 3 significant digits
 /// below 1, trailing zeros dropped.
 fn format_label(v: f64) -> String {
@@ -326,14 +304,6 @@ mod tests {
         assert_eq!(viridis(-1.0), viridis(0.0));
         assert_eq!(viridis(f32::NAN), viridis(0.0));
         assert_eq!(viridis(7.0), viridis(1.0));
-    }
-
-    /// The film's writer gives back every byte [`srgb_decode`] decoded.
-    #[test]
-    fn srgb_round_trip_is_exact() {
-        for b in 0..=255u8 {
-            assert_eq!(super::super::film::to_u8(srgb_decode(b), true), b);
-        }
     }
 
     fn gradient(width: u32, height: u32, max: f32, what: &str) -> Heatmap {

@@ -125,6 +125,16 @@ pub struct KindSteps {
 
 impl KindSteps {
     /// The steps of `kind`.
+    pub fn get(&self, kind: RayKind) -> Steps {
+        match kind {
+            RayKind::Camera => self.camera,
+            RayKind::Shadow => self.shadow,
+            RayKind::Reflected => self.reflected,
+            RayKind::Refracted => self.refracted,
+        }
+    }
+
+    /// The steps of `kind`, to add to.
     pub fn of(&mut self, kind: RayKind) -> &mut Steps {
         match kind {
             RayKind::Camera => &mut self.camera,

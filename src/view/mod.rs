@@ -186,8 +186,7 @@ pub(crate) fn render_loop(
         let heatmap = job.heatmap.zip(sums.pixel_rays()).map(|(measure, rays)| {
             let kind = CostKind { measure, rays: None };
             let map = kind.heatmap(job.options.width, job.options.height, rays);
-            let rgb = |[r, g, b]: [u8; 3]| (u32::from(r) << 16) | (u32::from(g) << 8) | u32::from(b);
-            map.overlaid().into_iter().map(rgb).collect()
+            map.overlaid().into_iter().map(packed).collect()
         });
         let pixels = heatmap.unwrap_or_else(|| film.pixels.iter().map(|&c| word(c, srgb)).collect());
         let frame = Frame {
@@ -206,8 +205,12 @@ pub(crate) fn render_loop(
 
 /// A linear colour as the window's `0x00RRGGBB` word, rounded as the saved image is.
 fn word(c: Vec3, srgb: bool) -> u32 {
-    let [r, g, b] = [c.x, c.y, c.z].map(|v| u32::from(to_u8(v, srgb)));
-    (r << 16) | (g << 8) | b
+    packed([c.x, c.y, c.z].map(|v| to_u8(v, srgb)))
+}
+
+/// sRGB bytes as the window's `0x00RRGGBB` word.
+fn packed([r, g, b]: [u8; 3]) -> u32 {
+    (u32::from(r) << 16) | (u32::from(g) << 8) | u32::from(b)
 }
 
 /// Writes `text` and a newline to standard error, or drops it where standard error cannot take it:
@@ -374,11 +377,7 @@ mod tests {
             rays: None,
         }
         .heatmap(48, 64, sums.pixel_rays().unwrap());
-        let [r, g, b] = map.overlaid()[0];
-        assert_eq!(
-            frame.pixels[0],
-            (u32::from(r) << 16) | (u32::from(g) << 8) | u32::from(b)
-        );
+        assert_eq!(frame.pixels[0], packed(map.overlaid()[0]));
         assert_ne!(frame.pixels[0], word(frame.film.pixels[0], false));
     }
 }

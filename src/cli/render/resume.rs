@@ -19,7 +19,8 @@ pub fn starting_point(plan: &Plan, scene: &Scene) -> (Progressive, Option<Progre
     if !plan.resume || std::fs::symlink_metadata(&stop).is_err() {
         return fresh();
     }
-    let part = match usable(plan, scene) {
+    let (passes, tiles) = (plan.passes(), plan.tile_indices());
+    let part = match usable(plan, scene, &tiles) {
         Ok(part) => part,
         Err(why) => {
             warn(&[format!(
@@ -34,7 +35,6 @@ pub fn starting_point(plan: &Plan, scene: &Scene) -> (Progressive, Option<Progre
             crate::cli::console::note(format!("whitted: resuming from {}: {what}", stop.display()));
         }
     };
-    let (passes, tiles) = (plan.passes(), plan.tile_indices());
     if part.tiles == tiles {
         if part.passes.len() < passes.len() {
             say(format!("{} of {} passes done", part.passes.len(), passes.len()));
@@ -55,7 +55,7 @@ pub fn starting_point(plan: &Plan, scene: &Scene) -> (Progressive, Option<Progre
 /// The stop file's part, if this run can go on from it: of this render (same settings), over the
 /// first passes of this run and within its tiles (all of them, or some of them in one pass); else
 /// why not.
-fn usable(plan: &Plan, scene: &Scene) -> Result<Part, String> {
+fn usable(plan: &Plan, scene: &Scene, tiles: &[u32]) -> Result<Part, String> {
     let part = Part::read(&plan.stop_file()).map_err(|e| e.message)?;
     let settings = PartSettings::new(scene, &plan.options, plan.total_passes);
     let differences = settings.differences(&part.settings);
@@ -65,7 +65,7 @@ fn usable(plan: &Plan, scene: &Scene) -> Result<Part, String> {
             differences.join(", ")
         ));
     }
-    let (passes, tiles) = (plan.passes(), plan.tile_indices());
+    let passes = plan.passes();
     let (start, end) = (part.passes.start, part.passes.end);
     if start != passes.start || end > passes.end {
         return Err(format!(

@@ -25,12 +25,15 @@ impl Renderer<'_> {
         for y in tile.y0..tile.y1 {
             for x in tile.x0..tile.x1 {
                 let i = ((y - tile.y0) * TILE + (x - tile.x0)) as usize;
-                let mut mine = RayCounts::default();
-                buf[i] = self.pixel_in_pass(x, y, pass, &mut pattern, &mut mine);
-                *rays += mine;
-                if let Some(p) = pixels.as_deref_mut() {
-                    p[i] = mine;
-                }
+                // A counting render keeps each pixel's rays apart; the others count into the tile's.
+                buf[i] = match pixels.as_deref_mut() {
+                    Some(p) => {
+                        let colour = self.pixel_in_pass(x, y, pass, &mut pattern, &mut p[i]);
+                        *rays += p[i];
+                        colour
+                    }
+                    None => self.pixel_in_pass(x, y, pass, &mut pattern, rays),
+                };
             }
         }
     }
