@@ -61,17 +61,34 @@ pub const NO_EMBREE: &str = "this whitted was built without Embree: `--accel emb
 /// How the BVHs are built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BuildOptions {
-    /// The BVH2's split rule (the BVH4 always collapses a binned-SAH BVH2).
+    /// The BVH2's split rule (the wide BVHs always collapse a binned-SAH BVH2).
     pub builder: Builder,
     /// SAH bins per axis.
     pub bins: usize,
+    /// Optimize the BVH2 by reinsertion (Bittner et al. 2013) before it is used or collapsed.
+    pub reinsert: bool,
 }
 
 impl Default for BuildOptions {
     fn default() -> Self {
+        BuildOptions::DEFAULT
+    }
+}
+
+impl BuildOptions {
+    /// Binned SAH with 12 bins, then reinsertion: what `--build auto` builds, since reinsertion keeps
+    /// the build well within twice Embree's medium build (docs/performance.md).
+    pub const DEFAULT: BuildOptions = BuildOptions {
+        builder: Builder::Sah { bins: 12 },
+        bins: 12,
+        reinsert: true,
+    };
+
+    /// The same options with the binned SAH builder: the wide BVHs collapse a binned-SAH BVH2.
+    pub fn sah(&self) -> BuildOptions {
         BuildOptions {
-            builder: Builder::Sah { bins: 12 },
-            bins: 12,
+            builder: Builder::Sah { bins: self.bins },
+            ..*self
         }
     }
 }
@@ -178,14 +195,14 @@ impl<'a> Accel<'a> {
             AccelKind::Embree => Self::try_build_with(prims, kind, options).unwrap_or_else(|e| panic!("{e}")),
             AccelKind::None => Accel::Brute(Brute::new(prims)),
             AccelKind::Grid => Accel::Grid(Grid::build(prims)),
-            AccelKind::Bvh2 => Accel::Bvh2(Bvh2::new(prims, options.builder)),
-            AccelKind::Bvh4 => match Bvh4::new(prims, options.bins) {
+            AccelKind::Bvh2 => Accel::Bvh2(Bvh2::build(prims, &options)),
+            AccelKind::Bvh4 => match Bvh4::build(prims, &options) {
                 Some(b) => Accel::Bvh4(b),
-                None => Accel::Bvh2(Bvh2::new(prims, Builder::Sah { bins: options.bins })),
+                None => Accel::Bvh2(Bvh2::build(prims, &options.sah())),
             },
-            AccelKind::Bvh8 => match Bvh8::new(prims, options.bins) {
+            AccelKind::Bvh8 => match Bvh8::build(prims, &options) {
                 Some(b) => Accel::Bvh8(b),
-                None => Accel::Bvh2(Bvh2::new(prims, Builder::Sah { bins: options.bins })),
+                None => Accel::Bvh2(Bvh2::build(prims, &options.sah())),
             },
         }
     }

@@ -30,8 +30,9 @@ pub struct InfoArgs {
     /// report its build time and shape.
     #[arg(long)]
     accel: Option<AccelKind>,
-    /// The BVH2 builder when `--accel bvh2`: sah or midpoint.
-    #[arg(long, default_value = "sah")]
+    /// How the BVHs are built: auto (today optimized), sah, optimized (binned SAH, then
+    /// reinsertion) or midpoint (the BVH2 only; the wide BVHs collapse a binned-SAH BVH2).
+    #[arg(long, default_value = "auto")]
     build: BuildKind,
     /// SAH bins per axis (2 to 64).
     #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(2..=64))]

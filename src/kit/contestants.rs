@@ -11,7 +11,9 @@ use crate::accel::{Accel, AccelKind, BuildOptions, Isa, Prims};
 /// A structure and the options it is built with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Build {
-    /// Its name: `grid`, `bvh2 midpoint`, `bvh2 sah`, `bvh4`, `bvh4 4 bins`, `bvh8`.
+    /// Its name: `grid`, `bvh2 midpoint`, `bvh2 sah`, `bvh2 optimized`, `bvh4`, `bvh4 4 bins`, `bvh8`
+    /// (the wide BVHs at the default build, [`BuildOptions::DEFAULT`]), `bvh8 sah` (without
+    /// reinsertion).
     pub name: &'static str,
     /// The structure.
     pub kind: AccelKind,
@@ -22,14 +24,14 @@ pub struct Build {
     pub each_simd: bool,
 }
 
-/// The SAH's default: 12 bins per axis.
+/// The binned SAH alone, 12 bins per axis.
 const SAH: BuildOptions = BuildOptions {
-    builder: Builder::Sah { bins: 12 },
-    bins: 12,
+    reinsert: false,
+    ..BuildOptions::DEFAULT
 };
 
 /// Every build: what the build bench times, and what [`all`] builds.
-pub const BUILDS: [Build; 6] = [
+pub const BUILDS: [Build; 8] = [
     Build {
         name: "grid",
         kind: AccelKind::Grid,
@@ -41,7 +43,7 @@ pub const BUILDS: [Build; 6] = [
         kind: AccelKind::Bvh2,
         options: BuildOptions {
             builder: Builder::Midpoint,
-            bins: 12,
+            ..SAH
         },
         each_simd: false,
     },
@@ -52,9 +54,15 @@ pub const BUILDS: [Build; 6] = [
         each_simd: false,
     },
     Build {
+        name: "bvh2 optimized",
+        kind: AccelKind::Bvh2,
+        options: BuildOptions::DEFAULT,
+        each_simd: false,
+    },
+    Build {
         name: "bvh4",
         kind: AccelKind::Bvh4,
-        options: SAH,
+        options: BuildOptions::DEFAULT,
         each_simd: true,
     },
     Build {
@@ -63,14 +71,21 @@ pub const BUILDS: [Build; 6] = [
         options: BuildOptions {
             builder: Builder::Sah { bins: 4 },
             bins: 4,
+            ..BuildOptions::DEFAULT
         },
         each_simd: false,
     },
     Build {
         name: "bvh8",
         kind: AccelKind::Bvh8,
-        options: SAH,
+        options: BuildOptions::DEFAULT,
         each_simd: true,
+    },
+    Build {
+        name: "bvh8 sah",
+        kind: AccelKind::Bvh8,
+        options: SAH,
+        each_simd: false,
     },
 ];
 

@@ -197,6 +197,8 @@ fn build_and_bins_give_the_same_bytes_and_are_bounded() {
     for (name, extra) in [
         ("midpoint", &["--accel", "bvh2", "--build", "midpoint"][..]),
         ("sah2", &["--accel", "bvh2", "--build", "sah", "--bins", "2"]),
+        ("optimized2", &["--accel", "bvh2", "--build", "optimized"]),
+        ("bvh8sah", &["--accel", "bvh8", "--build", "sah"]),
         ("sah64", &["--accel", "bvh2", "--bins", "64"]),
         ("bvh4bins2", &["--accel", "bvh4", "--bins", "2"]),
         ("bvh8bins64", &["--accel", "bvh8", "--bins", "64"]),
@@ -214,7 +216,10 @@ fn build_and_bins_give_the_same_bytes_and_are_bounded() {
         &small(scene, &["--build", "median"]),
         "error: invalid value 'median' for '--build <BUILD>'",
     );
-    assert!(err.contains("[possible values: sah, midpoint]"), "{err}");
+    assert!(
+        err.contains("[possible values: auto, sah, optimized, midpoint]"),
+        "{err}"
+    );
 }
 
 /// `--focal` moves the focal plane of the lens: with the file's aperture the image changes with it
@@ -702,6 +707,7 @@ fn info_accel_build_and_bins_describe_the_structure_built() {
         &["--accel", "bvh2", "--build", "midpoint"][..],
         &["--accel", "bvh2", "--build", "sah"],
         &["--accel", "bvh2", "--build", "sah", "--bins", "2"],
+        &["--accel", "bvh2", "--build", "optimized"],
         &["--accel", "bvh2"],
     ] {
         let line = info_accel(scene, extra);
@@ -711,7 +717,7 @@ fn info_accel_build_and_bins_describe_the_structure_built() {
         assert_eq!(nodes, 2 * leaves - 1, "{line}");
         trees.push((nodes, depth, sah));
     }
-    let [midpoint, sah, sah2, default] = trees[..] else {
+    let [midpoint, sah, sah2, optimized, default] = trees[..] else {
         unreachable!()
     };
     assert!(midpoint != sah, "midpoint and sah build the same tree: {sah:?}");
@@ -720,7 +726,11 @@ fn info_accel_build_and_bins_describe_the_structure_built() {
         "the SAH builder costs more: {sah:?} {midpoint:?}"
     );
     assert!(sah2 != sah, "--bins 2 builds the 12 bins' tree");
-    assert!(default == sah, "the default is not sah with 12 bins");
+    assert!(
+        default == optimized,
+        "the default (auto) is not sah with 12 bins and reinsertion"
+    );
+    assert!(optimized.2 <= sah.2, "reinsertion raises the SAH cost");
     // The wide trees take --bins too.
     let four = |bins: &str| {
         let line = info_accel(scene, &["--accel", "bvh4", "--bins", bins]);

@@ -3,9 +3,11 @@
 //! of primitive ids. It is the BVH4's source, and an accelerator of its own.
 
 mod build;
+mod reinsert;
 
 use std::fmt;
 
+use super::BuildOptions;
 use super::counters;
 use super::policy::HitPolicy;
 use super::prims::{Hit, Prims};
@@ -14,7 +16,7 @@ use super::structure::Structure;
 use crate::geometry::aabb::Aabb;
 use crate::geometry::ray::{CULL_MARGIN, Ray, safe_inverse};
 
-pub use build::{Builder, MAX_TREE_DEPTH, build};
+pub use build::{Builder, MAX_LEAF, MAX_TREE_DEPTH, build};
 
 /// A node: a box and either two children (`count == 0`, children at `first` and `first + 1`) or a leaf
 /// of `count` primitives (`ids[first..first + count]`).
@@ -71,6 +73,31 @@ impl<'a> Bvh2<'a> {
     pub fn with_block(prims: Prims<'a>, builder: Builder, block: usize) -> Self {
         let (nodes, ids) = build(&prims, builder, block);
         Bvh2 { prims, nodes, ids }
+    }
+
+    /// Builds the tree `options` describe, for scalar leaf tests.
+    pub fn build(prims: Prims<'a>, options: &BuildOptions) -> Self {
+        Self::build_with_block(prims, options, 1)
+    }
+
+    /// Builds the tree `options` describe for leaves that test `block` primitives at the cost of one.
+    pub fn build_with_block(prims: Prims<'a>, options: &BuildOptions, block: usize) -> Self {
+        let bvh = Self::with_block(prims, options.builder, block);
+        if options.reinsert { bvh.reinserted() } else { bvh }
+    }
+
+    /// The tree after insertion-based optimization ([`reinsert`]): the same leaves under interior
+    /// nodes of less summed area. Unchanged where no move pays, or where the moves would deepen the
+    /// tree past [`MAX_TREE_DEPTH`].
+    pub fn reinserted(self) -> Self {
+        match reinsert::reinsert(&self.nodes, &self.ids) {
+            Some((nodes, ids)) => Bvh2 {
+                prims: self.prims,
+                nodes,
+                ids,
+            },
+            None => self,
+        }
     }
 
     /// The primitives this tree indexes.

@@ -27,7 +27,8 @@ pub use stream::STREAM_MIN;
 
 use glam::Vec3;
 
-use super::bvh2::{self, Builder, Bvh2, Stats};
+use super::BuildOptions;
+use super::bvh2::{self, Bvh2, Stats};
 use super::packet::{HitPacket, RayPacket};
 use super::pages::on_huge_pages;
 use super::policy::HitPolicy;
@@ -119,10 +120,22 @@ impl<'a, const W: usize> WideBvh<'a, W> {
     /// Builds a binned-SAH BVH2 and collapses it. Scenes beyond [`MAX_PRIMS`] primitives have no wide
     /// BVH.
     pub fn new(prims: Prims<'a>, bins: usize) -> Option<Self> {
+        Self::build(
+            prims,
+            &BuildOptions {
+                bins,
+                ..BuildOptions::default()
+            },
+        )
+    }
+
+    /// Builds the BVH2 `options` describe with the binned SAH ([`BuildOptions::sah`]) and collapses
+    /// it. Scenes beyond [`MAX_PRIMS`] primitives have no wide BVH.
+    pub fn build(prims: Prims<'a>, options: &BuildOptions) -> Option<Self> {
         if prims.bounded() > MAX_PRIMS {
             return None;
         }
-        Some(Self::from_bvh2(Bvh2::with_block(prims, Builder::Sah { bins }, 4)))
+        Some(Self::from_bvh2(Bvh2::build_with_block(prims, &options.sah(), 4)))
     }
 
     /// Collapses a BVH2 (whose leaves hold one kind, at most 15 primitives each).

@@ -38,8 +38,9 @@ pub struct RenderArgs {
     /// Most bounces after the primary hit (default 6, at most 64).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=whitted::render::MAX_DEPTH as i64))]
     pub max_depth: Option<u32>,
-    /// The BVH2 builder when `--accel bvh2`: sah or midpoint.
-    #[arg(long, default_value = "sah")]
+    /// How the BVHs are built: auto (today optimized), sah, optimized (binned SAH, then
+    /// reinsertion) or midpoint (the BVH2 only; the wide BVHs collapse a binned-SAH BVH2).
+    #[arg(long, default_value = "auto")]
     pub build: BuildKind,
     /// SAH bins per axis (2 to 64).
     #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(2..=64))]
