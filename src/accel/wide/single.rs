@@ -163,6 +163,30 @@ impl<const W: usize> WideBvh<'_, W> {
                     }};
                 }
                 if mask != 0 {
+                    if (P::ANY || W == 4) && mask.is_power_of_two() {
+                        // One child: picked by branches on the mask, not by its bit's index, so
+                        // that the CPU predicts the way and loads the child (and the next node)
+                        // before the slab test is through (tinybvh's "branchy" step). It loses on
+                        // the BVH8's closest-hit bounces, and as a function (profiles/tried.md).
+                        // `% W`: lanes the BVH4 never reaches, their indices kept in range.
+                        let c = &node.child;
+                        current = if mask & 0x0f != 0 {
+                            if mask & 0x03 != 0 {
+                                if mask & 1 != 0 { c[0] } else { c[1] }
+                            } else if mask & 4 != 0 {
+                                c[2]
+                            } else {
+                                c[3 % W]
+                            }
+                        } else if mask & 0x30 != 0 {
+                            if mask & 0x10 != 0 { c[4 % W] } else { c[5 % W] }
+                        } else if mask & 0x40 != 0 {
+                            c[6 % W]
+                        } else {
+                            c[7 % W]
+                        };
+                        continue;
+                    }
                     let first = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
                     if mask == 0 {
