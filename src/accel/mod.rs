@@ -1,8 +1,9 @@
 //! Accelerators. Each answers the same two questions (as tinybvh does on every layout): the closest hit
 //! along a ray and whether anything lies on a segment, for one ray (`intersect`, `occluded`), a packet
 //! of eight (`intersect_packet`, `occluded_packet`) or a stream of any number (`intersect_stream`,
-//! `occluded_stream`): six verbs, dispatched in one place over the [`Structure`] trait, whose packet
-//! and stream verbs default to ray by ray. That shared interface is what lets every structure be
+//! `occluded_stream`), and the closest hit of a coherent single ray (`intersect_coherent`, a camera
+//! ray: the same answer by steps that pay for such rays): seven verbs, dispatched in one place over the
+//! [`Structure`] trait, whose packet and stream verbs default to ray by ray. That shared interface is what lets every structure be
 //! checked against brute force with one loop, and lets the renderer send packets and streams without
 //! knowing which structure answers them.
 
@@ -33,7 +34,7 @@ use crate::geometry::ray::{Ray, ahead};
 use brute::Brute;
 use bvh2::{Builder, Bvh2};
 use grid::Grid;
-use policy::{AnyHit, Closest, Counted, HitPolicy};
+use policy::{AnyHit, Closest, Coherent, Counted, HitPolicy};
 use wide::{Bvh4, Bvh8};
 
 /// Which structure to build.
@@ -258,6 +259,12 @@ impl<'a> Accel<'a> {
         Verbs::<Plain>::new(self).intersect(ray, t_min, hit)
     }
 
+    /// The closest hit of a ray much like the one traced before it ([`Verbs::intersect_coherent`]).
+    #[inline]
+    pub fn intersect_coherent(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        Verbs::<Plain>::new(self).intersect_coherent(ray, t_min, hit)
+    }
+
     /// True if anything is hit with `t` in `(t_min, t_max)` ([`Verbs::occluded`]).
     #[inline]
     pub fn occluded(&self, ray: &Ray, t_min: f32, t_max: f32) -> bool {
@@ -291,6 +298,8 @@ impl<'a> Accel<'a> {
 pub trait Tally {
     /// The closest-hit policy.
     type Closest: HitPolicy;
+    /// The closest-hit policy for coherent rays.
+    type Coherent: HitPolicy;
     /// The any-hit policy.
     type Any: HitPolicy;
 }
@@ -300,6 +309,7 @@ pub enum Plain {}
 
 impl Tally for Plain {
     type Closest = Closest;
+    type Coherent = Coherent;
     type Any = AnyHit;
 }
 
@@ -308,10 +318,11 @@ pub enum Counting {}
 
 impl Tally for Counting {
     type Closest = Counted<Closest>;
+    type Coherent = Counted<Coherent>;
     type Any = Counted<AnyHit>;
 }
 
-/// An accelerator's six verbs, written once for both [`Tally`]s.
+/// An accelerator's seven verbs, written once for both [`Tally`]s.
 pub struct Verbs<'r, 'a, T> {
     accel: &'r Accel<'a>,
     tally: PhantomData<T>,
@@ -340,6 +351,15 @@ impl<'r, 'a, T: Tally> Verbs<'r, 'a, T> {
         Self::lanes(1);
         let t_min = ahead(t_min);
         each!(self.accel, s => Structure::traverse::<T::Closest>(s, ray, t_min, hit))
+    }
+
+    /// [`Verbs::intersect`] for a ray that takes much the way the ray traced before it took (a camera
+    /// ray after its neighbour's): the same answer, by the steps that pay for such rays.
+    #[inline]
+    pub fn intersect_coherent(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        Self::lanes(1);
+        let t_min = ahead(t_min);
+        each!(self.accel, s => Structure::traverse::<T::Coherent>(s, ray, t_min, hit))
     }
 
     /// True if anything is hit with `t` in `(t_min, t_max)`.

@@ -11,6 +11,10 @@ pub trait HitPolicy {
     const ANY: bool;
     /// True: count nodes visited and primitives tested ([`super::counters`]).
     const COUNT: bool = false;
+    /// True: closest hit for rays that take the same way as the rays traced just before them (camera
+    /// rays of neighbouring pixels), so that the kernels may take steps that pay only then. The same
+    /// answers.
+    const COHERENT: bool = false;
 }
 
 /// Closest hit (camera, reflection and refraction rays).
@@ -18,6 +22,14 @@ pub struct Closest;
 
 impl HitPolicy for Closest {
     const ANY: bool = false;
+}
+
+/// Closest hit for coherent rays: camera rays, traced pixel after pixel.
+pub struct Coherent;
+
+impl HitPolicy for Coherent {
+    const ANY: bool = false;
+    const COHERENT: bool = true;
 }
 
 /// Any hit (shadow rays): the first hit in the interval ends the search.
@@ -33,4 +45,5 @@ pub struct Counted<P>(PhantomData<P>);
 impl<P: HitPolicy> HitPolicy for Counted<P> {
     const ANY: bool = P::ANY;
     const COUNT: bool = true;
+    const COHERENT: bool = P::COHERENT;
 }

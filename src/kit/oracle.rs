@@ -72,7 +72,8 @@ pub fn check(label: &str, accel: &Accel, agreement: Agreement, cases: &[Case], w
     }
 }
 
-/// Single rays: `intersect` finds the closest hit as `want` has it (per `agreement`); `occluded` says
+/// Single rays: `intersect` finds the closest hit as `want` has it (per `agreement`), and
+/// `intersect_coherent` the same hit, bit for bit; `occluded` says
 /// yes just beyond it and no just before it, and no on the whole interval of a miss. Returns the rays
 /// [`Agreement::Edges`] excused.
 pub fn check_single(label: &str, accel: &Accel, agreement: Agreement, cases: &[Case], want: &[Hit]) -> usize {
@@ -88,6 +89,13 @@ pub fn check_single(label: &str, accel: &Accel, agreement: Agreement, cases: &[C
                 c.ray, c.t_min, c.t_max
             )
         };
+        let mut coherent = Hit::miss(c.t_max);
+        let found_coherent = accel.intersect_coherent(&c.ray, c.t_min, &mut coherent);
+        assert!(
+            found_coherent == found && coherent == got,
+            "intersect_coherent gave {coherent:?}: {}",
+            ctx()
+        );
         let (limits, n) = agreement.any_hit_limits(c, want);
         if agreement == Agreement::Edges {
             let agrees = found == got.is_hit()

@@ -354,6 +354,8 @@ impl<'a> Whitted<'a> {
         let mut hit = Hit::miss(f32::INFINITY);
         if self.count {
             self.closest_counted(ray, kind, sample, &mut hit);
+        } else if kind == RayKind::Camera {
+            self.accel.intersect_coherent(ray, 0.0, &mut hit);
         } else {
             self.accel.intersect(ray, 0.0, &mut hit);
         }
@@ -364,7 +366,12 @@ impl<'a> Whitted<'a> {
     #[cold]
     #[inline(never)]
     fn closest_counted(&self, ray: &Ray, kind: RayKind, sample: &PixelSample, hit: &mut Hit) {
-        self.accel.counting().intersect(ray, 0.0, hit);
+        let verbs = self.accel.counting();
+        if kind == RayKind::Camera {
+            verbs.intersect_coherent(ray, 0.0, hit);
+        } else {
+            verbs.intersect(ray, 0.0, hit);
+        }
         charge(sample.slot, kind, counters::lane(0));
     }
 

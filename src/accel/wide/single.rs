@@ -163,11 +163,11 @@ impl<const W: usize> WideBvh<'_, W> {
                     }};
                 }
                 if mask != 0 {
-                    if (P::ANY || W == 4) && mask.is_power_of_two() {
+                    if (P::ANY || P::COHERENT || W == 4) && mask.is_power_of_two() {
                         // One child: picked by branches on the mask, not by its bit's index, so
                         // that the CPU predicts the way and loads the child (and the next node)
                         // before the slab test is through (tinybvh's "branchy" step). It loses on
-                        // the BVH8's closest-hit bounces, and as a function (profiles/tried.md).
+                        // the BVH8's incoherent bounces, and as a function (profiles/tried.md).
                         // `% W`: lanes the BVH4 never reaches, their indices kept in range.
                         let c = &node.child;
                         current = if mask & 0x0f != 0 {
