@@ -27,7 +27,7 @@ pub fn scenes() -> Vec<PathBuf> {
 }
 
 /// True for a smoke run: `WHITTED_BENCH_QUICK` is set.
-fn quick() -> bool {
+pub fn quick() -> bool {
     std::env::var_os("WHITTED_BENCH_QUICK").is_some()
 }
 

@@ -3,9 +3,9 @@
 
 use whitted::accel::counters::{self, Steps};
 use whitted::accel::policy::HitPolicy;
-use whitted::accel::{Accel, Counting, Hit, PACKET, Plain, Tally};
+use whitted::accel::{Accel, Counting, Hit, Isa, PACKET, Plain, Tally};
 use whitted::geometry::ray::Ray;
-use whitted::kit::contestants::Contestant as Built;
+use whitted::kit::contestants::{BUILDS, Contestant as Built};
 use whitted::kit::workload::packets_of;
 
 /// A ray and the end of the interval searched (∞ for whole rays): every ray set is given as segments.
@@ -28,9 +28,10 @@ pub trait Contestant: Sync {
     fn side(&self) -> Side;
     /// True for a packet kernel (compared with packets in the ratio rows).
     fn packets(&self) -> bool;
-    /// True for a stream kernel (ours only: its rows stand beside the others, outside the ratio rows).
-    fn streams(&self) -> bool {
-        false
+    /// True for a row of the comparison table ([`TABLE`]): every peer's, and ours that "our best" is
+    /// taken over ([`table_structures`]).
+    fn in_table(&self) -> bool {
+        self.side() == Side::Peer
     }
     /// Closest hits of the segments: how many hit.
     fn closest(&self, rays: &[Segment]) -> usize;
@@ -65,11 +66,37 @@ pub enum Verb {
 /// most 4,096 pixel samples a generation).
 pub const STREAM: usize = 4096;
 
+/// The filter that runs the comparison table's rows alone: `cargo bench --bench kernels -- table`.
+pub const TABLE: &str = "table";
+
+/// The instruction set the wide BVHs run unless told otherwise (`--simd auto`: the CPU's best), as the
+/// kit names it in their rows.
+pub fn auto_set() -> &'static str {
+    match Isa::detect() {
+        Isa::Avx512 => "avx512",
+        Isa::Avx2 => "avx2",
+        Isa::Portable => "portable",
+    }
+}
+
+/// The kit's names of the structures that "our best" is taken over, with their single rays and their
+/// packets: the BVH4 and the BVH8 at their default build on [`auto_set`], as `whitted render` runs them.
+/// The other instruction sets run the same trees, and a best over them too would pick whichever read
+/// high in the machine's noise.
+pub fn table_structures() -> Vec<String> {
+    BUILDS
+        .iter()
+        .filter(|b| b.each_simd)
+        .map(|b| format!("{} {}", b.name, auto_set()))
+        .collect()
+}
+
 /// One of the kit's structures ([`whitted::kit::contestants`]) with one of its kernels.
 pub struct Ours<'a> {
     id: String,
     accel: &'a Accel<'a>,
     verb: Verb,
+    table: bool,
 }
 
 impl<'a> Ours<'a> {
@@ -79,22 +106,38 @@ impl<'a> Ours<'a> {
             id: id.to_string(),
             accel,
             verb,
+            table: false,
         }
     }
 
-    /// Every structure of the kit with its single-ray kernel, and the wide BVHs with their packets and
-    /// streams too (the others answer packets and streams ray by ray: their rows would time single
-    /// rays again). Embree, which the kit lists with the `embree` feature, is a peer's: its rows are
-    /// `embree.rs`'s.
+    /// Every structure of `built` with its single-ray kernel, and the wide BVHs with their packets too
+    /// (the others answer packets ray by ray: their rows would time single rays again) and, on
+    /// [`auto_set`], their streams. The BVH4 runs on `auto_set` alone: its kernels are the BVH8's code
+    /// at width 4, and what another instruction set changes shows in the BVH8's rows (as it does for
+    /// streams, whose rays pay the single-ray kernel's tests, in the single-ray rows). Embree, which the
+    /// kit lists with the `embree` feature, is a peer's: its rows are `embree.rs`'s.
     pub fn all(built: &'a [Built<'a>]) -> Vec<Ours<'a>> {
+        let table = table_structures();
         let mut out = Vec::new();
         for b in built.iter().filter(|b| !b.is_embree()) {
-            let id = b.name.replace(' ', "-");
-            if b.has_packet_kernel() {
-                out.push(Ours::new(&format!("{id}-packets"), &b.accel, Verb::Packets));
-                out.push(Ours::new(&format!("{id}-streams"), &b.accel, Verb::Streams));
+            let auto = b.accel.simd().is_none_or(|s| s == Isa::detect());
+            if !auto && !matches!(b.accel, Accel::Bvh8(_)) {
+                continue;
             }
-            out.push(Ours::new(&id, &b.accel, Verb::Single));
+            let id = b.name.replace(' ', "-");
+            let in_table = table.contains(&b.name);
+            let mut push = |id: String, verb: Verb| {
+                let mut o = Ours::new(&id, &b.accel, verb);
+                o.table = in_table && verb != Verb::Streams;
+                out.push(o);
+            };
+            if b.has_packet_kernel() {
+                push(format!("{id}-packets"), Verb::Packets);
+                if auto {
+                    push(format!("{id}-streams"), Verb::Streams);
+                }
+            }
+            push(id, Verb::Single);
         }
         out
     }
@@ -113,8 +156,8 @@ impl Contestant for Ours<'_> {
         self.verb == Verb::Packets
     }
 
-    fn streams(&self) -> bool {
-        self.verb == Verb::Streams
+    fn in_table(&self) -> bool {
+        self.table
     }
 
     fn closest(&self, rays: &[Segment]) -> usize {

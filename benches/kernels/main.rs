@@ -1,13 +1,23 @@
 //! Kernel throughput on the dragon workload (`docs/dragon-workload.md`), in Mrays/s through
 //! criterion's throughput: one loop over the contestants × the ray sets × one thread and all of them.
 //! The contestants: every structure of the test kit (`whitted::kit::contestants`) with its single-ray
-//! kernel, the wide BVHs with their packet kernel (8 consecutive rays a packet) and their stream kernel
-//! (4,096 consecutive rays a stream, or a thread's 256 in the all-threads rows) too, and obvhs 0.4's
-//! CWBVH and BVH2 (`very_slow_build`, its best trees, traced with our triangle test); with
-//! `--features bench-embree`, Embree 3's single rays and 8-wide packets on its high-quality (spatial
-//! split) BVH, through the library's binding (`whitted::accel::embree`); with `--features bench-tinybvh`, tinybvh's BVH8_CPU (needs
+//! kernel, the wide BVHs with their packet kernel (8 consecutive rays a packet) too, the BVH8 on every
+//! instruction set and the others on the one `auto` picks, and on that set their stream kernel (4,096
+//! consecutive rays a stream; `Ours::all`); obvhs 0.4's CWBVH and BVH2 (`very_slow_build`, its best
+//! trees, traced with our triangle test); with `--features bench-embree`, Embree 3's single rays and
+//! 8-wide packets on its high-quality (spatial split) BVH, through the library's binding
+//! (`whitted::accel::embree`); with `--features bench-tinybvh`, tinybvh's BVH8_CPU (needs
 //! `RUSTFLAGS="-C target-cpu=native"`, `tinybvh.rs`). The ray sets: primary rays (closest hit), shadow
 //! rays (any hit) and diffuse bounces (closest hit, incoherent).
+//!
+//! The comparison table's rows are the peers' and ours that "our best" is taken over: the BVH4 and the
+//! BVH8 on the instruction set `auto` picks, single rays and packets (`contestant::table_structures`).
+//! Every contestant runs on one thread; on all threads, those rows alone. `cargo bench --bench kernels
+//! -- table` runs the table's rows alone, on one thread: `table` is this bench's name for them (as
+//! criterion's regex it would match no id), and of the other contestants only the grid, the reference,
+//! is built, and none is checked or measured. Any other filter is criterion's regex over the ids
+//! (`kernels-dragon_full/bvh8-avx512-packets/primary/2-threads`): every contestant is built and
+//! checked, the rows that do not match are not measured, and the tables show them as `-`.
 //!
 //! Before anything is measured, the workload's primary-hit count and Σt are checked (against the
 //! workload document's figures on the full dragon), the reference's hit counts against brute force on a
@@ -16,8 +26,8 @@
 //! side by side, per thread count, and, once the other build (portable or native) has run on this CPU,
 //! native over portable per row with the rows where native is slower (`builds.rs`).
 //!
-//! `cargo bench --bench kernels`; `WHITTED_BENCH_QUICK=1` for a smoke run; `WHITTED_BENCH_SCENE` for one
-//! other scene (default: the full dragon, then res2).
+//! `cargo bench --bench kernels`; `-- table` for the table's rows alone; `WHITTED_BENCH_QUICK=1` for a
+//! smoke run; `WHITTED_BENCH_SCENE` for one other scene (default: the full dragon, then res2).
 
 mod builds;
 #[path = "../common/mod.rs"]
@@ -30,21 +40,114 @@ mod peer;
 mod tinybvh;
 
 use std::hint::black_box;
-use std::time::SystemTime;
+use std::time::{Duration, SystemTime};
 
 use common::{obvhs as obvhs_build, table};
-use contestant::{Contestant, Ours, Segment, Side, Verb};
-use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use contestant::{Contestant, Ours, Segment, Side, TABLE, Verb};
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkFilter, BenchmarkGroup, Criterion, SamplingMode, Throughput};
 use peer::Traced;
 use rayon::prelude::*;
 use whitted::accel::{Accel, AccelKind, Hit, PrimKind, Prims};
 use whitted::geometry::ray::Ray;
 use whitted::kit::agreement::edge_margin;
-use whitted::kit::contestants as kit;
+use whitted::kit::contestants::{self as kit, Contestant as Built};
 use whitted::kit::workload::{self, Workload};
 
 /// Rays of each set that brute force traces (it tests all 871k triangles per ray).
 const BRUTE_SAMPLE: usize = 64;
+
+/// Seconds criterion measures each row for: long enough for 10 samples of the faster rows (a tenth to
+/// a third of a second an iteration) to read within the machine's own drift.
+const MEASURE: u64 = 2;
+
+/// A [`common::group`] for many rows of a tenth of a second to a second an iteration: half a second of
+/// warm-up rather than criterion's three (it doubles its iterations until past it, so it runs up to
+/// twice that), and flat sampling (10 samples of as many iterations each), where criterion's linear
+/// sampling (1 to 10 times a count, 55 counts in all) runs such rows for twice [`MEASURE`] or more.
+fn brief<'a>(c: &'a mut Criterion, name: &str) -> BenchmarkGroup<'a, WallTime> {
+    let mut g = common::group(c, name, MEASURE);
+    if !common::quick() {
+        g.warm_up_time(Duration::from_millis(500))
+            .sampling_mode(SamplingMode::Flat);
+    }
+    g
+}
+
+/// Which rows a run measures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Rows {
+    /// Every contestant on one thread, the table's on all threads too.
+    All,
+    /// The table's alone, on one thread (the filter [`TABLE`]).
+    Table,
+}
+
+impl Rows {
+    /// [`Rows::Table`] where criterion's filter is [`TABLE`].
+    fn from_args() -> Rows {
+        if filter().as_deref() == Some(TABLE) {
+            Rows::Table
+        } else {
+            Rows::All
+        }
+    }
+
+    /// Whether `c` runs on `threads` threads.
+    fn wants(self, c: &dyn Contestant, threads: usize) -> bool {
+        match self {
+            Rows::All => threads == 1 || c.in_table(),
+            Rows::Table => threads == 1 && c.in_table(),
+        }
+    }
+
+    /// The thread counts it runs: one, and all of the rayon pool's unless they are one too.
+    fn threads(self) -> Vec<usize> {
+        let all = rayon::current_num_threads();
+        match self {
+            Rows::All if all > 1 => vec![1, all],
+            _ => vec![1],
+        }
+    }
+}
+
+/// Criterion's filter: the first argument that is neither an option nor an option's value
+/// (`cargo bench --bench kernels -- FILTER` runs this binary as `kernels FILTER --bench`).
+fn filter() -> Option<String> {
+    // criterion's options that take a value (`Criterion::configure_from_args`).
+    const VALUED: [&str; 20] = [
+        "-c",
+        "--color",
+        "--colour",
+        "-s",
+        "--save-baseline",
+        "-b",
+        "--baseline",
+        "--baseline-lenient",
+        "--format",
+        "--profile-time",
+        "--load-baseline",
+        "--sample-size",
+        "--warm-up-time",
+        "--measurement-time",
+        "--nresamples",
+        "--noise-threshold",
+        "--confidence-level",
+        "--significance-level",
+        "--plotting-backend",
+        "--output-format",
+    ];
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        if !a.starts_with('-') {
+            return Some(a);
+        }
+        if VALUED.contains(&a.as_str()) {
+            args.next();
+        }
+    }
+    None
+}
 
 /// A ray set: its name in bench ids, its segments, which query it asks and the reference's hit count.
 pub struct Set {
@@ -141,17 +244,45 @@ fn check(c: &dyn Contestant, sets: &[Set], reference: &Accel, scene: &whitted::s
     }
 }
 
-fn kernels(c: &mut Criterion) {
+fn main() {
+    let rows = Rows::from_args();
+    let mut c = Criterion::default().configure_from_args();
+    if rows == Rows::Table {
+        // The loop registers the table's rows alone; as a regex, `table` would match none of them.
+        c = c.with_benchmark_filter(BenchmarkFilter::AcceptAll);
+    }
     let since = SystemTime::now();
     for path in common::scenes() {
-        scene(c, &path, since);
+        scene(&mut c, &path, since, rows);
     }
+    c.final_summary();
 }
 
-fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
+/// Our structures that `rows` needs, built once each: every build of the kit, or the grid (the
+/// reference) and the table's structures.
+fn structures(prims: Prims<'_>, rows: Rows) -> Vec<Built<'_>> {
+    if rows == Rows::All {
+        return kit::all(prims);
+    }
+    kit::BUILDS
+        .iter()
+        .filter(|b| b.kind == AccelKind::Grid || b.each_simd)
+        .map(|b| {
+            let accel = b.build(prims);
+            // As the kit names them, where a scene past the wide BVHs' limit gets a BVH2 without a set.
+            let name = match accel.simd() {
+                Some(_) => format!("{} {}", b.name, contestant::auto_set()),
+                None => b.name.to_string(),
+            };
+            Built { name, accel }
+        })
+        .collect()
+}
+
+fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime, rows: Rows) {
     let scene = whitted::scene::load(path).expect("the bench scene loads");
     let prims = Prims::new(&scene);
-    let built = kit::all(prims);
+    let built = structures(prims, rows);
     // The reference: the grid, brute force's answer bit for bit (`tests/accel/accel_vs_brute.rs`).
     let reference = &built
         .iter()
@@ -236,6 +367,7 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     contestants.extend(embree.iter().map(|e| e as &dyn Contestant));
     #[cfg(feature = "bench-tinybvh")]
     contestants.extend(tiny.as_ref().map(|t| t as &dyn Contestant));
+    contestants.retain(|c| rows.wants(*c, 1));
     // Every contestant finds the reference's hits on every set: a mismatch is a bug on one side.
     for c in &contestants {
         check(*c, &sets, reference, &scene);
@@ -243,14 +375,18 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
 
     let name = common::scene_name(path);
     let group = format!("kernels-{name}");
-    let mut g = common::group(c, &group, 4);
-    let all = rayon::current_num_threads();
+    let mut g = brief(c, &group);
     let suffix = |threads: usize| match threads {
         1 => String::new(),
         t => format!("/{t}-threads"),
     };
-    for threads in [1, all] {
-        for c in &contestants {
+    let on = |threads: usize| -> Vec<&dyn Contestant> {
+        let mut run = contestants.clone();
+        run.retain(|c| rows.wants(*c, threads));
+        run
+    };
+    for threads in rows.threads() {
+        for c in &on(threads) {
             for set in &sets {
                 g.throughput(Throughput::Elements(set.rays.len() as u64));
                 g.bench_function(format!("{}/{}{}", c.id(), set.name, suffix(threads)), |b| {
@@ -264,28 +400,31 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     }
     g.finish();
 
-    let sample_group = format!("{group}-sample");
-    let mut g = common::group(c, &sample_group, 4);
-    for set in &sets {
-        let s = sample(&set.rays);
-        g.throughput(Throughput::Elements(s.len() as u64));
-        g.bench_function(format!("brute/{}", set.name), |b| {
-            b.iter(|| set.trace(&brute, black_box(&s)))
-        });
+    if rows == Rows::All {
+        let sample_group = format!("{group}-sample");
+        let mut g = brief(c, &sample_group);
+        for set in &sets {
+            let s = sample(&set.rays);
+            g.throughput(Throughput::Elements(s.len() as u64));
+            g.bench_function(format!("brute/{}", set.name), |b| {
+                b.iter(|| set.trace(&brute, black_box(&s)))
+            });
+        }
+        g.finish();
     }
-    g.finish();
 
-    // The side-by-side table in Mrays/s, one row per contestant, then our best of each kind (single
-    // rays, packets) over each peer of that kind.
+    // The side-by-side table in Mrays/s, one row per contestant run, then our best of each kind (single
+    // rays, packets; over the table's rows) over each peer of that kind where both ran.
     let mrays = |id: &str, set: &Set, threads: usize| {
         table::median(&group, &format!("{id}/{}{}", set.name, suffix(threads)), since)
             .map(|s| set.rays.len() as f64 / s * 1e-6)
     };
     let mut header = vec!["contestant"];
     header.extend(sets.iter().map(|s| s.name));
-    for threads in [1, all] {
+    for threads in rows.threads() {
+        let run = on(threads);
         let speed = |c: &dyn Contestant| sets.iter().map(|s| mrays(c.id(), s, threads)).collect::<Vec<_>>();
-        let mut rows: Vec<(String, Vec<Option<String>>)> = contestants
+        let mut lines: Vec<(String, Vec<Option<String>>)> = run
             .iter()
             .map(|c| {
                 let cells = speed(*c).iter().map(|v| v.map(|v| format!("{v:.2}"))).collect();
@@ -293,23 +432,23 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
             })
             .collect();
         let best = |packets: bool| {
-            let mine: Vec<Vec<Option<f64>>> = contestants
+            let mine: Vec<Vec<Option<f64>>> = run
                 .iter()
-                .filter(|c| c.side() == Side::Ours && c.packets() == packets && !c.streams())
+                .filter(|c| c.side() == Side::Ours && c.in_table() && c.packets() == packets)
                 .map(|c| speed(*c))
                 .collect();
             (0..sets.len())
                 .map(|i| mine.iter().filter_map(|v| v[i]).reduce(f64::max))
                 .collect::<Vec<_>>()
         };
-        for peer in contestants.iter().filter(|c| c.side() == Side::Peer) {
+        for peer in run.iter().filter(|c| c.side() == Side::Peer) {
             let kind = if peer.packets() { "packets" } else { "single rays" };
             let cells = best(peer.packets())
                 .into_iter()
                 .zip(speed(*peer))
                 .map(|(a, b)| a.zip(b).map(|(a, b)| format!("{:.2}x", a / b)))
                 .collect();
-            rows.push((format!("our best {kind} / {}", peer.id()), cells));
+            lines.push((format!("our best {kind} / {}", peer.id()), cells));
         }
         let title = format!(
             "{}: Mrays/s, {threads} thread{} (criterion medians, {} build)",
@@ -317,16 +456,25 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
             if threads == 1 { "" } else { "s" },
             builds::this_build()
         );
-        table::print(&title, &header, &rows);
-        let figures: Vec<(String, Vec<Option<f64>>)> = contestants
-            .iter()
-            .map(|c| (c.id().to_string(), speed(*c)))
-            .collect();
+        table::print(&title, &header, &lines);
+        let figures: Vec<(String, Vec<Option<f64>>)> =
+            run.iter().map(|c| (c.id().to_string(), speed(*c))).collect();
         builds::record_and_compare(&format!("{group}-{threads}t"), &header[1..], &figures);
     }
+    // A peer whose feature is off has no row: said, so that the table is not read as complete.
+    if !cfg!(feature = "bench-embree") {
+        println!("\n(no Embree rows: built without `--features bench-embree`)");
+    }
+    if !cfg!(feature = "bench-tinybvh") {
+        println!(
+            "\n(no tinybvh row: built without `--features bench-tinybvh`, which needs \
+             RUSTFLAGS=\"-C target-cpu=native\")"
+        );
+    }
     // What each of our rows spends a ray on, counted apart from the timing (the counting verbs).
-    let rows: Vec<(String, Vec<Option<String>>)> = ours
+    let steps: Vec<(String, Vec<Option<String>>)> = ours
         .iter()
+        .filter(|o| rows.wants(*o, 1))
         .map(|o| {
             let cells = sets
                 .iter()
@@ -341,7 +489,7 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
     table::print(
         &format!("{}: nodes visited / primitives tested per ray", path.display()),
         &header,
-        &rows,
+        &steps,
     );
     #[cfg(feature = "bench-tinybvh")]
     println!(
@@ -349,6 +497,3 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime) {
         tinybvh::ID
     );
 }
-
-criterion_group!(benches, kernels);
-criterion_main!(benches);
