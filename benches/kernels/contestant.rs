@@ -35,6 +35,11 @@ pub trait Contestant: Sync {
     }
     /// Closest hits of the segments: how many hit.
     fn closest(&self, rays: &[Segment]) -> usize;
+    /// Closest hits of coherent segments (camera rays, pixel after pixel), as a renderer asks for
+    /// them: ours through `intersect_coherent`, the peers' as [`Contestant::closest`].
+    fn coherent(&self, rays: &[Segment]) -> usize {
+        self.closest(rays)
+    }
     /// Any hit on the segments: how many are blocked.
     fn occluded(&self, rays: &[Segment]) -> usize;
     /// A peer with its own triangle test, which may round differently from ours where a ray crosses
@@ -161,27 +166,42 @@ impl Contestant for Ours<'_> {
     }
 
     fn closest(&self, rays: &[Segment]) -> usize {
-        self.trace::<Plain>(rays, false).0
+        self.trace::<Plain>(rays, Query::Closest).0
+    }
+
+    fn coherent(&self, rays: &[Segment]) -> usize {
+        self.trace::<Plain>(rays, Query::Coherent).0
     }
 
     fn occluded(&self, rays: &[Segment]) -> usize {
-        self.trace::<Plain>(rays, true).0
+        self.trace::<Plain>(rays, Query::Any).0
     }
+}
+
+/// What a ray set asks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Query {
+    /// The closest hit.
+    Closest,
+    /// The closest hit of coherent rays (single rays through `intersect_coherent`).
+    Coherent,
+    /// Any hit.
+    Any,
 }
 
 impl Ours<'_> {
     /// The mean nodes visited and primitives tested per ray of `rays` (any hit or closest), counted
     /// by the counting verbs of the row's kernel: the table beside Mrays/s, so that a faster row can be
     /// told apart as fewer steps or cheaper steps.
-    pub fn steps_per_ray(&self, rays: &[Segment], any: bool) -> (f64, f64) {
-        let steps = self.trace::<Counting>(rays, any).1;
+    pub fn steps_per_ray(&self, rays: &[Segment], query: Query) -> (f64, f64) {
+        let steps = self.trace::<Counting>(rays, query).1;
         let n = rays.len().max(1) as f64;
         (steps.nodes as f64 / n, steps.prims as f64 / n)
     }
 
     /// The rays that hit (or are blocked) through the verbs of `T`, and the steps counted (none
     /// for [`Plain`]).
-    fn trace<T: Tally>(&self, rays: &[Segment], any: bool) -> (usize, Steps) {
+    fn trace<T: Tally>(&self, rays: &[Segment], query: Query) -> (usize, Steps) {
         let verbs = self.accel.verbs::<T>();
         // The kernels' closures are `Fn`: the sum goes through a cell.
         let steps = std::cell::Cell::new(Steps::default());
@@ -192,6 +212,7 @@ impl Ours<'_> {
                 steps.set(sum);
             }
         };
+        let any = query == Query::Any;
         let hits = match (self.verb, any) {
             (Verb::Packets, false) => packets_of(rays, |r, active, t_max| {
                 let mut hits = t_max.map(Hit::miss);
@@ -219,7 +240,10 @@ impl Ours<'_> {
             (Verb::Single, false) => rays
                 .iter()
                 .filter(|(ray, t_max)| {
-                    let found = verbs.intersect(ray, 0.0, &mut Hit::miss(*t_max));
+                    let found = match query {
+                        Query::Coherent => verbs.intersect_coherent(ray, 0.0, &mut Hit::miss(*t_max)),
+                        _ => verbs.intersect(ray, 0.0, &mut Hit::miss(*t_max)),
+                    };
                     tally(1);
                     found
                 })

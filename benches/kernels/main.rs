@@ -7,8 +7,9 @@
 //! trees, traced with our triangle test); with `--features bench-embree`, Embree 3's single rays and
 //! 8-wide packets on its high-quality (spatial split) BVH, through the library's binding
 //! (`whitted::accel::embree`); with `--features bench-tinybvh`, tinybvh's BVH8_CPU (needs
-//! `RUSTFLAGS="-C target-cpu=native"`, `tinybvh.rs`). The ray sets: primary rays (closest hit), shadow
-//! rays (any hit) and diffuse bounces (closest hit, incoherent).
+//! `RUSTFLAGS="-C target-cpu=native"`, `tinybvh.rs`). The ray sets: primary rays (closest hit, our
+//! single rays through `intersect_coherent`, as the renderer sends camera rays), shadow rays (any hit)
+//! and diffuse bounces (closest hit, incoherent).
 //!
 //! The comparison table's rows are the peers' and ours that "our best" is taken over: the BVH4 and the
 //! BVH8 on the instruction set `auto` picks, single rays and packets (`contestant::table_structures`).
@@ -43,7 +44,7 @@ use std::hint::black_box;
 use std::time::{Duration, SystemTime};
 
 use common::{obvhs as obvhs_build, table};
-use contestant::{Contestant, Ours, Segment, Side, TABLE, Verb};
+use contestant::{Contestant, Ours, Query, Segment, Side, TABLE, Verb};
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkFilter, BenchmarkGroup, Criterion, SamplingMode, Throughput};
 use peer::Traced;
@@ -153,18 +154,18 @@ fn filter() -> Option<String> {
 pub struct Set {
     pub name: &'static str,
     pub rays: Vec<Segment>,
-    /// Any hit (shadow rays) rather than closest hit.
-    pub any: bool,
+    /// What it asks: closest hits (of coherent rays for the primary set) or any hit.
+    pub query: Query,
     pub hits: usize,
 }
 
 impl Set {
     /// `c`'s answer to this set's query on `rays` (the set's rays or a part of them).
     fn trace(&self, c: &dyn Contestant, rays: &[Segment]) -> usize {
-        if self.any {
-            c.occluded(rays)
-        } else {
-            c.closest(rays)
+        match self.query {
+            Query::Closest => c.closest(rays),
+            Query::Coherent => c.coherent(rays),
+            Query::Any => c.occluded(rays),
         }
     }
 }
@@ -313,19 +314,19 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime, rows: Row
         Set {
             name: "primary",
             rays: whole(&w.primary),
-            any: false,
+            query: Query::Coherent,
             hits: w.primary_hits,
         },
         Set {
             name: "shadow-any",
             rays: w.shadow.clone(),
-            any: true,
+            query: Query::Any,
             hits: 0,
         },
         Set {
             name: "diffuse",
             rays: whole(&w.diffuse),
-            any: false,
+            query: Query::Closest,
             hits: 0,
         },
     ];
@@ -479,7 +480,7 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime, rows: Row
             let cells = sets
                 .iter()
                 .map(|set| {
-                    let (nodes, prims) = o.steps_per_ray(&set.rays, set.any);
+                    let (nodes, prims) = o.steps_per_ray(&set.rays, set.query);
                     Some(format!("{nodes:.1} / {prims:.1}"))
                 })
                 .collect();
