@@ -348,18 +348,22 @@ impl<'r, 'a, T: Tally> Verbs<'r, 'a, T> {
     /// Every query of every accelerator searches ahead of the ray's origin: a negative `t_min` is 0.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
-        Self::lanes(1);
-        let t_min = ahead(t_min);
-        each!(self.accel, s => Structure::traverse::<T::Closest>(s, ray, t_min, hit))
+        self.closest::<T::Closest>(ray, t_min, hit)
     }
 
     /// [`Verbs::intersect`] for a ray that takes much the way the ray traced before it took (a camera
     /// ray after its neighbour's): the same answer, by the steps that pay for such rays.
     #[inline]
     pub fn intersect_coherent(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
+        self.closest::<T::Coherent>(ray, t_min, hit)
+    }
+
+    /// One ray's closest hit under the closest-hit policy `P` (plain or coherent).
+    #[inline(always)]
+    fn closest<P: HitPolicy>(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
         Self::lanes(1);
         let t_min = ahead(t_min);
-        each!(self.accel, s => Structure::traverse::<T::Coherent>(s, ray, t_min, hit))
+        each!(self.accel, s => Structure::traverse::<P>(s, ray, t_min, hit))
     }
 
     /// True if anything is hit with `t` in `(t_min, t_max)`.

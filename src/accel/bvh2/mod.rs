@@ -81,7 +81,7 @@ impl<'a> Bvh2<'a> {
     }
 
     /// Builds the tree `options` describe for leaves that test `block` primitives at the cost of one.
-    pub fn build_with_block(prims: Prims<'a>, options: &BuildOptions, block: usize) -> Self {
+    pub(crate) fn build_with_block(prims: Prims<'a>, options: &BuildOptions, block: usize) -> Self {
         let bvh = Self::with_block(prims, options.builder, block);
         if options.reinsert { bvh.reinserted() } else { bvh }
     }

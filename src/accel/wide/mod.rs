@@ -117,8 +117,8 @@ pub type Bvh4<'a> = WideBvh<'a, 4>;
 pub type Bvh8<'a> = WideBvh<'a, 8>;
 
 impl<'a, const W: usize> WideBvh<'a, W> {
-    /// Builds a binned-SAH BVH2 and collapses it. Scenes beyond [`MAX_PRIMS`] primitives have no wide
-    /// BVH.
+    /// Builds the default tree ([`BuildOptions::DEFAULT`]: binned SAH, then reinsertion) with `bins`
+    /// bins and collapses it. Scenes beyond [`MAX_PRIMS`] primitives have no wide BVH.
     pub fn new(prims: Prims<'a>, bins: usize) -> Option<Self> {
         Self::build(
             prims,
