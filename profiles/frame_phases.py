@@ -74,8 +74,8 @@ def main():
     first_level = lambda c: c.endswith("shade_packet")  # noqa: E731
     deeper = lambda c: "shade_packet'" in c  # noqa: E731
     phases = [
-        ("camera rays (Renderer::camera_sample)", inclusive("::camera_sample"), "primary"),
-        ("sample patterns (PixelPattern::fill)", inclusive("PixelPattern::fill"), "primary"),
+        ("camera rays and their samples (Renderer::camera_packet)", inclusive("::camera_packet"), "primary"),
+        ("sample patterns (PixelPattern::fill, spp > 1 only)", inclusive("PixelPattern::fill"), "primary"),
         ("traversal, camera rays (packets)", called_by("Accel::intersect_packet", first_level), "primary"),
         (
             "traversal, shadow rays (packets and single)",
@@ -88,6 +88,12 @@ def main():
             "secondary",
         ),
         ("hit points: position, normals, uv (Prims::surface)", inclusive("Prims::surface"), "all"),
+        (
+            "shading in lanes: shadow rays' set-up, Blinn-Phong (local_packet)",
+            inclusive("::local_packet")
+            - called_by("Accel::occluded_packet", lambda c: c.endswith("::local_packet")),
+            "all",
+        ),
     ]
     rays = sum(counts.values())
     measured = sum(n for _, n, _ in phases)

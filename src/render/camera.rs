@@ -1,6 +1,7 @@
 //! Primary rays: the pinhole (and, with an aperture, thin-lens) camera of the `v` block.
 
 use glam::{Vec2, Vec3};
+use wide::f32x8;
 
 use crate::geometry::length_and_direction;
 use crate::geometry::ray::Ray;
@@ -77,6 +78,22 @@ impl RayCamera {
         Ray::new(origin, (focus - origin).normalize())
     }
 
+    /// The pinhole rays through image points `(x[k], y[k])`, eight at once: [`ray`](Self::ray)'s
+    /// operations lane by lane in its order (IEEE arithmetic and square roots are exact per lane, and
+    /// Rust never fuses them), so the same bits.
+    #[inline]
+    pub fn rays8(&self, x: [f32; 8], y: [f32; 8]) -> [Ray; 8] {
+        let s = f32x8::splat;
+        let sx = (s(2.0) * f32x8::from(x) / s(self.width as f32) - s(1.0)) * s(self.half.0);
+        let sy = (s(1.0) - s(2.0) * f32x8::from(y) / s(self.height as f32)) * s(self.half.1);
+        let axis = |i: usize| s(self.forward[i]) + sx * s(self.right[i]) + sy * s(self.up[i]);
+        let d = [axis(0), axis(1), axis(2)];
+        // glam's `normalize`: times the reciprocal of the length, (x² + y²) + z² summed in that order.
+        let inv = s(1.0) / (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let d = d.map(|c| (c * inv).to_array());
+        std::array::from_fn(|k| Ray::new(self.eye, Vec3::new(d[0][k], d[1][k], d[2][k])))
+    }
+
     /// The direction through image point `(x, y)`, scaled to reach the plane one unit ahead.
     #[inline]
     fn through(&self, x: f32, y: f32) -> Vec3 {
@@ -138,6 +155,34 @@ mod tests {
             pinhole.lens_ray(3.0, 4.0, Vec2::ONE).dir,
             pinhole.ray(3.0, 4.0).dir
         );
+    }
+
+    /// Eight pinhole rays at once are the single rays, bit for bit, all over the image and beyond it.
+    #[test]
+    fn rays_in_lanes_are_the_single_rays() {
+        let cam = Camera::new(
+            Vec3::new(2.3, 1.6, 1.1),
+            Vec3::new(0.1, -0.2, 0.0),
+            Vec3::Y,
+            50.0,
+            800,
+            600,
+        );
+        let rc = RayCamera::new(&cam, 800, 600);
+        let mut rng = crate::render::sampler::Sampler::new(5, 1, 0, 1);
+        for _ in 0..1000 {
+            let x: [f32; 8] = std::array::from_fn(|_| rng.uniform() * 900.0 - 50.0);
+            let y: [f32; 8] = std::array::from_fn(|_| rng.uniform() * 700.0 - 50.0);
+            let lanes = rc.rays8(x, y);
+            for k in 0..8 {
+                let one = rc.ray(x[k], y[k]);
+                assert_eq!(
+                    lanes[k].dir.to_array().map(f32::to_bits),
+                    one.dir.to_array().map(f32::to_bits)
+                );
+                assert_eq!(lanes[k].origin, one.origin);
+            }
+        }
     }
 
     /// The image centre looks at `at`; the top edge is half the field of view above it.

@@ -40,6 +40,13 @@ impl<'a> Lights<'a> {
         self.len() == 0
     }
 
+    /// Whether sample `i` is a fixed one, the same for every pixel sample (else a quad light's point,
+    /// which depends on the pixel sample's `uv`).
+    #[inline]
+    pub fn shared(&self, i: usize) -> bool {
+        i < self.fixed.len()
+    }
+
     /// Sample `i` (below [`len`](Self::len)).
     #[inline]
     pub fn get(&self, i: usize) -> LightSample {

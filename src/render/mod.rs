@@ -23,6 +23,7 @@ pub mod film;
 pub mod frame;
 pub mod heatmap;
 mod kernel;
+mod lanes;
 pub mod light;
 pub mod memory;
 pub mod optics;

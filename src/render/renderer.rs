@@ -13,9 +13,10 @@ use glam::{Vec2, Vec3};
 use super::camera::RayCamera;
 use super::env::Background;
 use super::options::Options;
-use super::sampler::{PixelPattern, Sampler};
+use super::sampler::{PixelKey, PixelPattern, Sampler};
 use super::whitted::{PixelSample, RayKind, SampleRays, Whitted};
 use crate::accel::Accel;
+use crate::digest::mix;
 use crate::geometry::ray::Ray;
 use crate::scene::{Camera, Scene};
 
@@ -30,6 +31,8 @@ pub struct Renderer<'a> {
     /// corner rays.
     centre: f32,
     pub(super) options: Options,
+    /// The seed, mixed once for every pixel's generators ([`PixelKey`]).
+    seed_key: u64,
     /// What the renderer fell back on (a skybox that did not load, say), for the user to see.
     pub warnings: Vec<String>,
 }
@@ -94,6 +97,7 @@ impl<'a> Renderer<'a> {
             },
             side,
             centre: if options.spd { 0.0 } else { 0.5 },
+            seed_key: mix(options.seed),
             options,
             warnings,
         }
@@ -111,20 +115,65 @@ impl<'a> Renderer<'a> {
         (self.options.width, self.options.height)
     }
 
-    /// The light samples and random numbers of sample `s` of pixel `index` in pass `pass` (the light
+    /// The key of pixel `(x, y)`'s generators.
+    #[inline]
+    pub(super) fn pixel_key(&self, x: u32, y: u32) -> PixelKey {
+        PixelKey::new(
+            self.seed_key,
+            u64::from(y) * u64::from(self.options.width) + u64::from(x),
+        )
+    }
+
+    /// The light samples and random numbers of sample `s` of pixel `pixel` in pass `pass` (the light
     /// point `uv` is the sample's paired point of the pattern; unused at spp 0).
     #[inline]
-    pub(super) fn pixel_sample(&self, pass: u32, index: u64, s: u32, uv: Vec2) -> PixelSample<'_> {
+    pub(super) fn pixel_sample(&self, pass: u32, pixel: PixelKey, s: u32, uv: Vec2) -> PixelSample<'_> {
         PixelSample {
             lights: self.whitted.lights(uv),
-            rng: Sampler::new(self.options.seed, pass, index, 1 + s),
+            rng: Sampler::of_pixel(pixel, pass, 1 + s),
             rays: SampleRays::default(),
             slot: 0,
         }
     }
 
-    /// Sample `s` of pixel `(x, y)`: its camera ray and what it carries (the pattern must be the
-    /// pixel's, filled for this pass).
+    /// Sample `s` of pixel `(x, y)` up to its camera ray: the image point the ray passes through, the
+    /// lens point it leaves from (`None`: the pinhole's ray, which the packet kernel computes eight
+    /// at a time) and what the sample carries. `pattern` must be the pixel's, filled for this pass
+    /// ([`fill_pattern`](Self::fill_pattern)); at one sample a pixel it is not read.
+    #[inline]
+    pub(super) fn sample_start(
+        &self,
+        x: u32,
+        y: u32,
+        pass: u32,
+        s: u32,
+        pattern: &PixelPattern,
+    ) -> (Vec2, Option<Vec2>, PixelSample<'_>) {
+        let key = self.pixel_key(x, y);
+        let corner = Vec2::new(x as f32, y as f32);
+        if self.side == 0 {
+            let sample = self.pixel_sample(pass, key, 0, Vec2::splat(0.5));
+            return (corner + self.centre, None, sample);
+        }
+        let (p, uv) = match self.side {
+            1 => PixelPattern::single(key, pass),
+            _ => (pattern.pixel[s as usize], pattern.light[s as usize]),
+        };
+        let mut sample = self.pixel_sample(pass, key, s, uv);
+        // The lens point's two numbers are drawn even for a pinhole, so that a sample's later random
+        // numbers do not depend on the camera; only a lens maps them onto the disc (the map's sine
+        // and cosine were a third of a pinhole camera ray's instructions: profiles/frame.txt).
+        let lens = if self.camera.has_lens() {
+            Some(sample.rng.in_unit_disc())
+        } else {
+            sample.rng.next2();
+            None
+        };
+        (corner + p, lens, sample)
+    }
+
+    /// Sample `s` of pixel `(x, y)`: its camera ray and what it carries ([`sample_start`](Self::sample_start)).
+    #[inline]
     pub(super) fn camera_sample(
         &self,
         x: u32,
@@ -133,26 +182,17 @@ impl<'a> Renderer<'a> {
         s: u32,
         pattern: &PixelPattern,
     ) -> (Ray, PixelSample<'_>) {
-        let index = u64::from(y) * u64::from(self.options.width) + u64::from(x);
-        let (x, y) = (x as f32, y as f32);
-        if self.side == 0 {
-            return (
-                self.camera.ray(x + self.centre, y + self.centre),
-                self.pixel_sample(pass, index, 0, Vec2::splat(0.5)),
-            );
-        }
-        let (p, uv) = (pattern.pixel[s as usize], pattern.light[s as usize]);
-        let mut sample = self.pixel_sample(pass, index, s, uv);
-        // The lens point's two numbers are drawn even for a pinhole, so that a sample's later random
-        // numbers do not depend on the camera; only a lens maps them onto the disc (the map's sine
-        // and cosine were a third of a pinhole camera ray's instructions: profiles/frame.txt).
-        let lens = if self.camera.has_lens() {
-            sample.rng.in_unit_disc()
-        } else {
-            sample.rng.next2();
-            Vec2::ZERO
+        let (at, lens, sample) = self.sample_start(x, y, pass, s, pattern);
+        let ray = match lens {
+            Some(lens) => self.camera.lens_ray(at.x, at.y, lens),
+            None => self.camera.ray(at.x, at.y),
         };
-        (self.camera.lens_ray(x + p.x, y + p.y, lens), sample)
+        (ray, sample)
+    }
+
+    /// The camera, for the kernels' rays.
+    pub(super) fn camera(&self) -> &RayCamera {
+        &self.camera
     }
 
     /// Samples per pixel actually taken (at least one).
@@ -160,11 +200,11 @@ impl<'a> Renderer<'a> {
         (self.side * self.side).max(1)
     }
 
-    /// Fills `pattern` for pixel `(x, y)` in pass `pass` (nothing to fill at spp 0).
+    /// Fills `pattern` for pixel `(x, y)` in pass `pass`: only where a pixel takes more than one
+    /// sample ([`sample_start`](Self::sample_start) draws a single one's numbers itself).
     pub(super) fn fill_pattern(&self, x: u32, y: u32, pass: u32, pattern: &mut PixelPattern) {
-        if self.side > 0 {
-            let index = u64::from(y) * u64::from(self.options.width) + u64::from(x);
-            pattern.fill(self.side, self.options.seed, pass, index);
+        if self.side > 1 {
+            pattern.fill(self.side, self.pixel_key(x, y), pass);
         }
     }
 
@@ -175,7 +215,7 @@ impl<'a> Renderer<'a> {
             ray,
             0,
             RayKind::Camera,
-            &mut self.pixel_sample(1, 0, 0, Vec2::splat(0.5)),
+            &mut self.pixel_sample(1, self.pixel_key(0, 0), 0, Vec2::splat(0.5)),
         )
     }
 }

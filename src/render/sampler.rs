@@ -9,17 +9,28 @@
 //! a [`Sampler`] supplies the lens point and the fuzzy-reflection perturbations.
 
 use glam::{Vec2, Vec3};
-use rand_xoshiro::Xoshiro256PlusPlus;
-use rand_xoshiro::rand_core::{Rng, SeedableRng};
 
 use crate::digest::{SPLITMIX_STEP, mix};
 
 /// Streams of one pixel: the pattern, then each sample's own.
 const PATTERN_STREAM: u32 = 0;
 
+/// A pixel's part of its generators' seeds: the render's seed (mixed once a frame, [`mix`]) mixed with
+/// the pixel's row-major index.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelKey(u64);
+
+impl PixelKey {
+    /// The key of pixel `pixel` in a render whose seed mixes to `seed_key`.
+    #[inline]
+    pub fn new(seed_key: u64, pixel: u64) -> Self {
+        PixelKey(mix(seed_key ^ pixel))
+    }
+}
+
 /// A generator of uniform numbers for one pixel sample (or one pixel's pattern).
 pub struct Sampler {
-    rng: Xoshiro256PlusPlus,
+    rng: Xoshiro256pp,
 }
 
 impl Sampler {
@@ -27,16 +38,20 @@ impl Sampler {
     /// index) in pass `pass` of a render seeded with `seed`.
     #[inline]
     pub fn new(seed: u64, pass: u32, pixel: u64, stream: u32) -> Self {
-        let key = mix(mix(mix(seed) ^ pixel) ^ (u64::from(pass) << 32 | u64::from(stream)));
-        // `Xoshiro256PlusPlus::seed_from_u64`'s state (four SplitMix64 outputs), spelt out so that it
-        // inlines here: the crate's function is not `#[inline]`, and a release build has no LTO.
-        let mut state = [0u8; 32];
-        for (i, word) in state.chunks_exact_mut(8).enumerate() {
-            let x = key.wrapping_add(SPLITMIX_STEP.wrapping_mul(i as u64 + 1));
-            word.copy_from_slice(&mix(x).to_le_bytes());
-        }
+        Sampler::of_pixel(PixelKey::new(mix(seed), pixel), pass, stream)
+    }
+
+    /// [`Sampler::new`] from the pixel's key: the streams of one pixel share it, so a frame mixes the
+    /// seed once and each pixel's index once, whatever the streams drawn.
+    #[inline]
+    pub fn of_pixel(pixel: PixelKey, pass: u32, stream: u32) -> Self {
+        let key = mix(pixel.0 ^ (u64::from(pass) << 32 | u64::from(stream)));
+        // `Xoshiro256PlusPlus::seed_from_u64(key)`'s state: four SplitMix64 outputs.
+        let word = |i: u64| mix(key.wrapping_add(SPLITMIX_STEP.wrapping_mul(i)));
         Sampler {
-            rng: Xoshiro256PlusPlus::from_seed(state),
+            rng: Xoshiro256pp {
+                s: [word(1), word(2), word(3), word(4)],
+            },
         }
     }
 
@@ -87,6 +102,38 @@ impl Sampler {
     }
 }
 
+/// xoshiro256++ (Blackman and Vigna 2018, "Scrambled Linear Pseudorandom Number Generators"), the
+/// numbers of `rand_xoshiro`'s `Xoshiro256PlusPlus`, its state seeded as words: the crate takes a seed
+/// only as bytes, and the round trip through them showed in every camera ray (`profiles/README.md`).
+/// Its state is never all zero (the crate's fallback): the four words are a bijective mix of four
+/// distinct numbers, of which at most one mixes to zero.
+#[derive(Clone, Debug)]
+struct Xoshiro256pp {
+    s: [u64; 4],
+}
+
+impl Xoshiro256pp {
+    #[inline]
+    fn next_u64(&mut self) -> u64 {
+        let s = &mut self.s;
+        let out = s[0].wrapping_add(s[3]).rotate_left(23).wrapping_add(s[0]);
+        let t = s[1] << 17;
+        s[2] ^= s[0];
+        s[3] ^= s[1];
+        s[1] ^= s[2];
+        s[0] ^= s[3];
+        s[2] ^= t;
+        s[3] = s[3].rotate_left(45);
+        out
+    }
+
+    /// The upper half of the next output, as the crate's `next_u32` (the lower bits are weaker).
+    #[inline]
+    fn next_u32(&mut self) -> u32 {
+        (self.next_u64() >> 32) as u32
+    }
+}
+
 /// One pixel's n × n jittered sub-pixel positions and their shuffled jittered light samples. The
 /// buffers are reused from pixel to pixel (no allocation per pixel once grown).
 #[derive(Clone, Debug, Default)]
@@ -99,8 +146,8 @@ pub struct PixelPattern {
 
 impl PixelPattern {
     /// Fills the pattern of pixel `pixel` for `n × n` samples (`n ≥ 1`).
-    pub fn fill(&mut self, n: u32, seed: u64, pass: u32, pixel: u64) {
-        let mut rng = Sampler::new(seed, pass, pixel, PATTERN_STREAM);
+    pub fn fill(&mut self, n: u32, pixel: PixelKey, pass: u32) {
+        let mut rng = Sampler::of_pixel(pixel, pass, PATTERN_STREAM);
         let cells = (n * n) as usize;
         let inv = 1.0 / n as f32;
         let jittered = |out: &mut Vec<Vec2>, rng: &mut Sampler| {
@@ -120,11 +167,40 @@ impl PixelPattern {
             self.light.swap(i, j);
         }
     }
+
+    /// The one sample of a 1 × 1 pattern, [`fill`](Self::fill)'s numbers without its buffers: the
+    /// offset in the pixel and the light point (cell 0 scaled by 1: the numbers themselves, bit for bit).
+    #[inline]
+    pub fn single(pixel: PixelKey, pass: u32) -> (Vec2, Vec2) {
+        let mut rng = Sampler::of_pixel(pixel, pass, PATTERN_STREAM);
+        let offset = rng.next2();
+        (offset, rng.next2())
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The generator gives `rand_xoshiro`'s numbers from the same seed (SplitMix64 words, as its
+    /// `seed_from_u64`), and the reference implementation's from the crate's test seed.
+    #[test]
+    fn xoshiro_is_the_crates() {
+        use rand_xoshiro::Xoshiro256PlusPlus;
+        use rand_xoshiro::rand_core::{Rng, SeedableRng};
+        for key in [0u64, 1, 42, u64::MAX, 0x9e37_79b9_7f4a_7c15] {
+            let mut ours = Sampler::of_pixel(PixelKey(key), 0, 0).rng;
+            let mut theirs = Xoshiro256PlusPlus::seed_from_u64(mix(key));
+            for _ in 0..100 {
+                assert_eq!(ours.next_u64(), theirs.next_u64());
+                assert_eq!(ours.next_u32(), theirs.next_u32());
+            }
+        }
+        // http://xoshiro.di.unimi.it/xoshiro256plusplus.c from state (1, 2, 3, 4).
+        let mut reference = Xoshiro256pp { s: [1, 2, 3, 4] };
+        let first: Vec<u64> = (0..4).map(|_| reference.next_u64()).collect();
+        assert_eq!(first, [41943041, 58720359, 3588806011781223, 3591011842654386]);
+    }
 
     #[test]
     fn streams_are_reproducible_and_distinct() {
@@ -153,7 +229,7 @@ mod tests {
         for n in [1u32, 2, 3, 7] {
             let mut paired_same_cell = 0;
             for pixel in 0..50u64 {
-                p.fill(n, 1, 1, pixel);
+                p.fill(n, PixelKey::new(mix(1), pixel), 1);
                 for set in [&p.pixel, &p.light] {
                     let mut seen = vec![false; (n * n) as usize];
                     for s in set {
@@ -179,6 +255,26 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A 1 × 1 pattern without its buffers draws the same numbers, and a pixel's key gives the
+    /// generators the seed and index give.
+    #[test]
+    fn the_single_sample_is_the_patterns() {
+        let mut p = PixelPattern::default();
+        for pixel in 0..100u64 {
+            let key = PixelKey::new(mix(9), pixel);
+            p.fill(1, key, 3);
+            let (offset, light) = PixelPattern::single(key, 3);
+            assert_eq!((offset, light), (p.pixel[0], p.light[0]));
+            let (mut a, mut b) = (Sampler::new(9, 3, pixel, 5), Sampler::of_pixel(key, 3, 5));
+            assert_eq!(a.rng.next_u64(), b.rng.next_u64());
+        }
+        // The numbers themselves: in [0, 1), and not the same for every pixel.
+        let single = |pixel| PixelPattern::single(PixelKey::new(mix(9), pixel), 3);
+        let (a, b) = (single(0), single(1));
+        assert_ne!(a.0, b.0);
+        assert!(a.0.min_element() >= 0.0 && a.1.max_element() < 1.0);
     }
 
     #[test]

@@ -39,7 +39,8 @@ pub struct ShadowRay {
 impl ShadowRay {
     /// The shadow ray from `p` (geometric normal `ng`, shading normal `ns`) to `light`, or `None` when
     /// the light is behind the shading normal (it then adds nothing, neither diffuse nor highlight). The
-    /// packet and single-ray paths both build their shadow rays here, so they trace the same rays.
+    /// single-ray and stream paths build their shadow rays here, the packet path the same rays in
+    /// lanes (`kernel/packet.rs`).
     #[inline]
     pub fn new(p: Vec3, ng: Vec3, ns: Vec3, light: &LightSample) -> Option<Self> {
         let l = (light.position - p).normalize();
@@ -503,7 +504,22 @@ impl<'a> Whitted<'a> {
         trace: &mut impl FnMut(usize, &Ray) -> Vec3,
     ) -> Vec3 {
         let m = &self.scene.materials[surface.material as usize];
-        let mut color = self.local(surface, -ray.dir, m, lights, occluded);
+        let local = self.local(surface, -ray.dir, m, lights, occluded);
+        self.add_bounces(local, surface, bounces, trace)
+    }
+
+    /// The colour at `surface` from its `local` colour (the light samples') and what its `bounces`
+    /// see (`trace`, as in [`shade_surface`](Self::shade_surface)), absorbed by Beer's law where
+    /// the ray crossed a transmitter's interior.
+    pub(super) fn add_bounces(
+        &self,
+        local: Vec3,
+        surface: &Surface,
+        bounces: &Bounces,
+        trace: &mut impl FnMut(usize, &Ray) -> Vec3,
+    ) -> Vec3 {
+        let m = &self.scene.materials[surface.material as usize];
+        let mut color = local;
         for (i, bounce) in [bounces.refracted, bounces.reflected].iter().enumerate() {
             if let Some((r, weight)) = bounce {
                 color += *weight * trace(i, r);
@@ -514,6 +530,11 @@ impl<'a> Whitted<'a> {
             color *= beer(m.diffuse, surface.t);
         }
         color
+    }
+
+    /// The scene shaded.
+    pub(super) fn scene(&self) -> &Scene {
+        self.scene
     }
 
     /// Blinn-Phong local colour: Σ C_light (Kd·Cd·max(0, n·L) + Ks·Cs·max(0, n·h)^shine), h = |L + V|,

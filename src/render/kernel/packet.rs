@@ -4,27 +4,28 @@
 //! to the depth limit. Rays that leave neighbouring pixels' hits toward one light, or off one smooth
 //! surface, stay about as coherent as the camera rays.
 //!
-//! Every lane is shaded by [`Whitted::shade_surface`] from the same rays the single-ray path traces
-//! ([`ShadowRay::new`], [`Whitted::bounces`]) and the accelerators' packet verbs answer each ray as
-//! their single-ray verbs do, so the image is the single-ray path's, bit for bit.
+//! The camera rays and the local shading (shadow-ray set-up and Blinn-Phong, light sample by light
+//! sample) run in lanes ([`super::super::lanes`]), with the single-ray path's operations in its order;
+//! each hit's bounces come from [`Whitted::bounces`] and its colour is finished by
+//! [`Whitted::add_bounces`], as on the single-ray path, and the accelerators' packet verbs answer each
+//! ray as their single-ray verbs do: the image is the single-ray path's, bit for bit.
 
 use glam::{Vec2, Vec3};
+use wide::f32x8;
 
 use super::{BLOCK_H, BLOCK_W, PerRay, TilePixels, coherent};
-use crate::accel::counters::{self, Steps};
+use crate::accel::counters;
 use crate::accel::packet::{PACKET, bits};
 use crate::accel::{Hit, Surface};
 use crate::geometry::ray::Ray;
+use crate::render::lanes::{Vec3x8, lane_mask, positive};
 use crate::render::renderer::Renderer;
 use crate::render::sampler::PixelPattern;
 use crate::render::tiles::{TILE, Tile};
 use crate::render::whitted::{
-    Bounces, PixelSample, RayCounts, RayKind, ShadowRay, Whitted, charge, take_steps,
+    Bounces, EPSILON, PixelSample, RayCounts, RayKind, Whitted, charge, take_steps,
 };
-
-/// Light samples whose shadow rays are traced as packets (one bit each in a lane's mask); the shading
-/// asks for any more ray by ray.
-const PACKET_LIGHTS: usize = 64;
+use crate::scene::{Material, MaterialId, Scene};
 
 impl Whitted<'_> {
     /// The colours seen along the rays of `rays` in `active` after `depth` bounces (others are zero):
@@ -52,7 +53,7 @@ impl Whitted<'_> {
         }
         let surfaces: PerRay<Option<Surface>> =
             std::array::from_fn(|k| (hit >> k & 1 == 1).then(|| self.prims.surface(&rays[k], &hits[k])));
-        let blocked = self.shadow_packets(&surfaces, samples);
+        let local = self.local_packet(rays, &surfaces, hit, samples);
 
         let bounces: PerRay<Bounces> = std::array::from_fn(|k| match &surfaces[k] {
             Some(s) => self.bounces(&rays[k], s, depth, &mut samples[k]),
@@ -76,28 +77,10 @@ impl Whitted<'_> {
 
         let mut out = [Vec3::ZERO; PACKET];
         for k in bits(active) {
-            let (mut extra_shadows, mut steps) = (0, Steps::default());
             out[k] = match &surfaces[k] {
                 None => self.shade(&rays[k], &hits[k], depth, &mut samples[k]),
-                Some(s) => self.shade_surface(
-                    &rays[k],
-                    s,
-                    &bounces[k],
-                    &samples[k].lights,
-                    &mut |i, shadow| match i {
-                        0..PACKET_LIGHTS => blocked[k] >> i & 1 == 1,
-                        _ => {
-                            extra_shadows += 1;
-                            self.blocked(shadow, &mut steps)
-                        }
-                    },
-                    &mut |i, _| seen[i][k],
-                ),
+                Some(s) => self.add_bounces(local[k], s, &bounces[k], &mut |i, _| seen[i][k]),
             };
-            samples[k].rays.shadow += extra_shadows;
-            if self.counts() {
-                charge(samples[k].slot, RayKind::Shadow, steps);
-            }
         }
         out
     }
@@ -123,43 +106,123 @@ impl Whitted<'_> {
         out
     }
 
-    /// Traces the shadow rays of a packet's hits, one packet per light sample (the first
-    /// [`PACKET_LIGHTS`]; lane `k` aims at its own sample's light `i`): bit `i` of lane `k` says whether
-    /// light sample `i` is blocked from hit `k`.
-    fn shadow_packets(
+    /// The local colour of the packet's hits (the lanes of `live`, at `surfaces`, seen along `rays`):
+    /// [`Whitted::shade_surface`]'s Blinn-Phong sum in lanes, light sample by light sample, each
+    /// sample's shadow rays set up in lanes and traced as one packet (lane `k` aims at its own pixel
+    /// sample's light). The same operations in the same order as the single-ray path's, so the same
+    /// bits; only `powf` goes lane by lane, as the scalar function.
+    // Not inlined: a phase of `profiles/frame.sh`, called once a packet.
+    #[inline(never)]
+    fn local_packet(
         &self,
+        rays: &PerRay<Ray>,
         surfaces: &PerRay<Option<Surface>>,
+        live: u8,
         samples: &mut PerRay<PixelSample>,
-    ) -> PerRay<u64> {
-        let mut blocked = [0u64; PACKET];
-        let count = samples[0].lights.len().min(PACKET_LIGHTS);
-        for i in 0..count {
-            let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
-            let mut t_max = [0.0; PACKET];
-            let mut active = 0u8;
-            for (k, s) in surfaces.iter().enumerate() {
-                let Some(s) = s else { continue };
-                let light = samples[k].lights.get(i);
-                if let Some(shadow) = ShadowRay::new(s.point, s.geometric, s.shading, &light) {
-                    (rays[k], t_max[k]) = (shadow.ray, shadow.distance);
-                    active |= 1 << k;
-                }
+    ) -> PerRay<Vec3> {
+        let Some(first) = bits(live).next() else {
+            return [Vec3::ZERO; PACKET];
+        };
+        let of = |f: fn(&Surface) -> Vec3| {
+            Vec3x8::from_lanes(&std::array::from_fn(|k| {
+                surfaces[k].as_ref().map_or(Vec3::ZERO, f)
+            }))
+        };
+        let (p, ng, ns) = (of(|s| s.point), of(|s| s.geometric), of(|s| s.shading));
+        let v = -Vec3x8::from_lanes(&rays.map(|r| r.dir));
+        let m = Materials::gather(self.scene(), surfaces, first);
+        let mut color = Vec3x8::ZERO;
+        for i in 0..samples[first].lights.len() {
+            let at = if samples[first].lights.shared(i) {
+                Vec3x8::splat(samples[first].lights.get(i).position)
+            } else {
+                Vec3x8::from_lanes(&std::array::from_fn(|k| samples[k].lights.get(i).position))
+            };
+            // `ShadowRay::new` in lanes: toward the light, from just off the side it lies on.
+            let l = (at - p).normalize();
+            let n_dot_l = ns.dot(l);
+            let lit = live & positive(n_dot_l);
+            if lit == 0 {
+                continue;
             }
-            if active != 0 {
-                for k in bits(active) {
-                    samples[k].rays.shadow += 1;
-                }
-                let hit = if self.counts() {
-                    blocked_counted(self, &rays, active, &t_max, samples)
-                } else {
-                    self.accel.occluded_packet(&rays, active, 0.0, &t_max)
-                };
-                for k in bits(hit) {
-                    blocked[k] |= 1 << i;
-                }
+            let eps = f32x8::splat(EPSILON);
+            let origin = p + ng * ng.dot(l).simd_ge(f32x8::ZERO).select(eps, -eps);
+            let distance = (at - origin).length().to_array();
+            let (origins, dirs) = (origin.lanes(), l.lanes());
+            let shadows: PerRay<Ray> = std::array::from_fn(|k| Ray::new(origins[k], dirs[k]));
+            for k in bits(lit) {
+                samples[k].rays.shadow += 1;
             }
+            let blocked = if self.counts() {
+                blocked_counted(self, &shadows, lit, &distance, samples)
+            } else {
+                self.accel.occluded_packet(&shadows, lit, 0.0, &distance)
+            };
+            let seen = lit & !blocked;
+            if seen == 0 {
+                continue;
+            }
+            // Blinn-Phong: Kd·Cd·(n·L), plus Ks·Cs·(n·h)^shine where Ks > 0.
+            let mut c = m.diffuse * (m.kd * n_dot_l);
+            let glossy = seen & m.glossy;
+            if glossy != 0 {
+                let n_dot_h = (l + v).normalize().dot(ns).to_array();
+                let mut power = [0.0; PACKET];
+                for k in bits(glossy) {
+                    power[k] = n_dot_h[k].max(0.0).powf(m.shininess[k]);
+                }
+                let highlight = m.specular * (m.ks * f32x8::from(power));
+                c = Vec3x8::select(lane_mask(glossy), c + highlight, c);
+            }
+            let light = Vec3x8::splat(samples[first].lights.get(i).color);
+            color = Vec3x8::select(lane_mask(seen), color + light * c, color);
         }
-        blocked
+        color.lanes()
+    }
+}
+
+/// The materials of a packet's hits in lanes, gathered once a packet (one load where every live lane
+/// hit the same material, the usual case).
+struct Materials {
+    kd: f32x8,
+    ks: f32x8,
+    shininess: [f32; PACKET],
+    diffuse: Vec3x8,
+    specular: Vec3x8,
+    /// The lanes whose material has a highlight (Ks > 0).
+    glossy: u8,
+}
+
+impl Materials {
+    /// The materials at `surfaces` (`first` live), dead lanes given `first`'s.
+    fn gather(scene: &Scene, surfaces: &PerRay<Option<Surface>>, first: usize) -> Self {
+        let id = |k: usize| surfaces[k].as_ref().map(|s| s.material);
+        let one = id(first).expect("a live lane");
+        let ids: PerRay<MaterialId> = std::array::from_fn(|k| id(k).unwrap_or(one));
+        let glossy = |m: &Material| m.ks > 0.0;
+        if ids.iter().all(|&i| i == one) {
+            let m = &scene.materials[one as usize];
+            return Materials {
+                kd: f32x8::splat(m.kd),
+                ks: f32x8::splat(m.ks),
+                shininess: [m.shininess; PACKET],
+                diffuse: Vec3x8::splat(m.diffuse),
+                specular: Vec3x8::splat(m.specular),
+                glossy: if glossy(m) { !0 } else { 0 },
+            };
+        }
+        let m = ids.map(|i| &scene.materials[i as usize]);
+        Materials {
+            kd: f32x8::from(m.map(|m| m.kd)),
+            ks: f32x8::from(m.map(|m| m.ks)),
+            shininess: m.map(|m| m.shininess),
+            diffuse: Vec3x8::from_lanes(&m.map(|m| m.diffuse)),
+            specular: Vec3x8::from_lanes(&m.map(|m| m.specular)),
+            glossy: m
+                .iter()
+                .enumerate()
+                .fold(0, |g, (k, m)| g | u8::from(glossy(m)) << k),
+        }
     }
 }
 
@@ -200,6 +263,45 @@ fn blocked_counted(
 }
 
 impl Renderer<'_> {
+    /// Sample `s` of the pixels of a packet's `active` lanes (lane `k` at `pixel(k)`, its pattern
+    /// `patterns[k]`): their camera rays, a pinhole's eight at once ([`RayCamera::rays8`]), and what
+    /// each carries, its slot its lane.
+    ///
+    /// [`RayCamera::rays8`]: crate::render::camera::RayCamera::rays8
+    // Not inlined: a phase of `profiles/frame.sh`, called once a packet.
+    #[inline(never)]
+    fn camera_packet(
+        &self,
+        pixel: impl Fn(usize) -> (u32, u32),
+        active: u8,
+        pass: u32,
+        s: u32,
+        patterns: &PerRay<PixelPattern>,
+    ) -> (PerRay<Ray>, PerRay<PixelSample<'_>>) {
+        let mut at = [Vec2::ZERO; PACKET];
+        let mut lens = [None; PACKET];
+        let samples = std::array::from_fn(|k| {
+            if active >> k & 1 == 0 {
+                return self.pixel_sample(pass, self.pixel_key(0, 0), 0, Vec2::ZERO);
+            }
+            let (x, y) = pixel(k);
+            let (point, lens_point, sample) = self.sample_start(x, y, pass, s, &patterns[k]);
+            (at[k], lens[k]) = (point, lens_point);
+            PixelSample {
+                slot: k as u32,
+                ..sample
+            }
+        });
+        let camera = self.camera();
+        let mut rays = camera.rays8(at.map(|p| p.x), at.map(|p| p.y));
+        for k in bits(active) {
+            if let Some(lens) = lens[k] {
+                rays[k] = camera.lens_ray(at[k].x, at[k].y, lens);
+            }
+        }
+        (rays, samples)
+    }
+
     /// Shades `tile` for pass `pass`, packet by packet (pixels outside the image are inactive lanes),
     /// into `buf`: sample `s` of eight pixels at a time, each lane with its pixel's own pattern and
     /// random numbers, summed per pixel in sample order as the single-ray path sums them; given
@@ -226,19 +328,7 @@ impl Renderer<'_> {
                 }
                 let mut sums = [Vec3::ZERO; PACKET];
                 for s in 0..self.samples() {
-                    let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
-                    let mut samples: PerRay<PixelSample> = std::array::from_fn(|k| {
-                        let (x, y) = pixel(k);
-                        if active >> k & 1 == 0 {
-                            return self.pixel_sample(pass, 0, 0, Vec2::ZERO);
-                        }
-                        let (ray, sample) = self.camera_sample(x, y, pass, s, &patterns[k]);
-                        rays[k] = ray;
-                        PixelSample {
-                            slot: k as u32,
-                            ..sample
-                        }
-                    });
+                    let (rays, mut samples) = self.camera_packet(pixel, active, pass, s, &patterns);
                     let colors = self
                         .whitted
                         .shade_packet(&rays, active, 0, RayKind::Camera, &mut samples);
