@@ -32,8 +32,10 @@ trap 'rm -rf "$tmp"' EXIT
         callgrind_annotate --inclusive=yes "$tmp/$loop.out" 2>/dev/null >"$tmp/$loop.txt"
         traversal=0
         for verb in intersect occluded intersect_packet occluded_packet intersect_stream occluded_stream; do
-            n=$(grep -E "^ *[0-9,]+ .*src/accel/mod.rs:whitted::accel::Accel::${verb}\$" "$tmp/$loop.txt" |
-                head -1 | awk '{gsub(",", "", $1); print $1}' || true)
+            # The verb as `Accel::verb` or, where that is inlined, `Verbs<...>::verb`: the larger
+            # inclusive count of the two (the outer call).
+            n=$(grep -E "^ *[0-9,]+ .*whitted::accel::(Accel|Verbs<[^>]*>)::${verb}( \[[^]]*\])?\$" "$tmp/$loop.txt" |
+                awk '{gsub(",", "", $1); print $1}' | sort -n | tail -1 || true)
             n=${n:-0}
             traversal=$((traversal + n))
             if [ "$n" -gt 0 ]; then printf '  %-18s %12d\n' "$verb" "$n"; fi

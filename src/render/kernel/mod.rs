@@ -6,6 +6,7 @@
 //! [`Kernel`]: super::Kernel
 
 mod packet;
+mod shade;
 mod single;
 mod stream;
 

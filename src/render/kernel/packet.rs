@@ -5,27 +5,24 @@
 //! surface, stay about as coherent as the camera rays.
 //!
 //! The camera rays and the local shading (shadow-ray set-up and Blinn-Phong, light sample by light
-//! sample) run in lanes ([`super::super::lanes`]), with the single-ray path's operations in its order;
+//! sample) run in lanes (`shade.rs`, `render/lanes.rs`), with the single-ray path's operations in its order;
 //! each hit's bounces come from [`Whitted::bounces`] and its colour is finished by
 //! [`Whitted::add_bounces`], as on the single-ray path, and the accelerators' packet verbs answer each
 //! ray as their single-ray verbs do: the image is the single-ray path's, bit for bit.
 
 use glam::{Vec2, Vec3};
-use wide::f32x8;
 
+use super::shade::{HitLanes, light};
 use super::{BLOCK_H, BLOCK_W, PerRay, TilePixels, coherent};
 use crate::accel::counters;
 use crate::accel::packet::{PACKET, bits};
 use crate::accel::{Hit, Surface};
 use crate::geometry::ray::Ray;
-use crate::render::lanes::{Vec3x8, lane_mask, positive};
+use crate::render::lanes::Vec3x8;
 use crate::render::renderer::Renderer;
 use crate::render::sampler::PixelPattern;
 use crate::render::tiles::{TILE, Tile};
-use crate::render::whitted::{
-    Bounces, EPSILON, PixelSample, RayCounts, RayKind, Whitted, charge, take_steps,
-};
-use crate::scene::{Material, MaterialId, Scene};
+use crate::render::whitted::{Bounces, PixelSample, RayCounts, RayKind, Whitted, charge, take_steps};
 
 impl Whitted<'_> {
     /// The colours seen along the rays of `rays` in `active` after `depth` bounces (others are zero):
@@ -53,7 +50,7 @@ impl Whitted<'_> {
         }
         let surfaces: PerRay<Option<Surface>> =
             std::array::from_fn(|k| (hit >> k & 1 == 1).then(|| self.prims.surface(&rays[k], &hits[k])));
-        let local = self.local_packet(rays, &surfaces, hit, samples);
+        let local = self.local_packet(rays, &surfaces, samples);
 
         let bounces: PerRay<Bounces> = std::array::from_fn(|k| match &surfaces[k] {
             Some(s) => self.bounces(&rays[k], s, depth, &mut samples[k]),
@@ -106,123 +103,45 @@ impl Whitted<'_> {
         out
     }
 
-    /// The local colour of the packet's hits (the lanes of `live`, at `surfaces`, seen along `rays`):
-    /// [`Whitted::shade_surface`]'s Blinn-Phong sum in lanes, light sample by light sample, each
-    /// sample's shadow rays set up in lanes and traced as one packet (lane `k` aims at its own pixel
-    /// sample's light). The same operations in the same order as the single-ray path's, so the same
-    /// bits; only `powf` goes lane by lane, as the scalar function.
+    /// The local colour of the packet's hits (at `surfaces`, seen along `rays`): light sample by
+    /// light sample, the eight shadow rays set up in lanes and traced as one packet (lane `k` aims at
+    /// its own pixel sample's light), and the Blinn-Phong sum in lanes ([`HitLanes`]).
     // Not inlined: a phase of `profiles/frame.sh`, called once a packet.
     #[inline(never)]
     fn local_packet(
         &self,
         rays: &PerRay<Ray>,
         surfaces: &PerRay<Option<Surface>>,
-        live: u8,
         samples: &mut PerRay<PixelSample>,
     ) -> PerRay<Vec3> {
-        let Some(first) = bits(live).next() else {
+        let Some(hits) = HitLanes::new(
+            self.scene(),
+            &rays.map(|r| r.dir),
+            &surfaces.each_ref().map(Option::as_ref),
+        ) else {
             return [Vec3::ZERO; PACKET];
         };
-        let of = |f: fn(&Surface) -> Vec3| {
-            Vec3x8::from_lanes(&std::array::from_fn(|k| {
-                surfaces[k].as_ref().map_or(Vec3::ZERO, f)
-            }))
-        };
-        let (p, ng, ns) = (of(|s| s.point), of(|s| s.geometric), of(|s| s.shading));
-        let v = -Vec3x8::from_lanes(&rays.map(|r| r.dir));
-        let m = Materials::gather(self.scene(), surfaces, first);
+        let lights = samples.each_ref().map(|s| s.lights);
         let mut color = Vec3x8::ZERO;
-        for i in 0..samples[first].lights.len() {
-            let at = if samples[first].lights.shared(i) {
-                Vec3x8::splat(samples[first].lights.get(i).position)
-            } else {
-                Vec3x8::from_lanes(&std::array::from_fn(|k| samples[k].lights.get(i).position))
-            };
-            // `ShadowRay::new` in lanes: toward the light, from just off the side it lies on.
-            let l = (at - p).normalize();
-            let n_dot_l = ns.dot(l);
-            let lit = live & positive(n_dot_l);
+        for i in 0..lights[0].len() {
+            let (at, light) = light(i, &lights);
+            let toward = hits.toward(at);
+            let lit = toward.lit;
             if lit == 0 {
                 continue;
             }
-            let eps = f32x8::splat(EPSILON);
-            let origin = p + ng * ng.dot(l).simd_ge(f32x8::ZERO).select(eps, -eps);
-            let distance = (at - origin).length().to_array();
-            let (origins, dirs) = (origin.lanes(), l.lanes());
-            let shadows: PerRay<Ray> = std::array::from_fn(|k| Ray::new(origins[k], dirs[k]));
             for k in bits(lit) {
                 samples[k].rays.shadow += 1;
             }
+            let (shadows, distance) = hits.shadow_rays(&toward);
             let blocked = if self.counts() {
                 blocked_counted(self, &shadows, lit, &distance, samples)
             } else {
                 self.accel.occluded_packet(&shadows, lit, 0.0, &distance)
             };
-            let seen = lit & !blocked;
-            if seen == 0 {
-                continue;
-            }
-            // Blinn-Phong: Kd·Cd·(n·L), plus Ks·Cs·(n·h)^shine where Ks > 0.
-            let mut c = m.diffuse * (m.kd * n_dot_l);
-            let glossy = seen & m.glossy;
-            if glossy != 0 {
-                let n_dot_h = (l + v).normalize().dot(ns).to_array();
-                let mut power = [0.0; PACKET];
-                for k in bits(glossy) {
-                    power[k] = n_dot_h[k].max(0.0).powf(m.shininess[k]);
-                }
-                let highlight = m.specular * (m.ks * f32x8::from(power));
-                c = Vec3x8::select(lane_mask(glossy), c + highlight, c);
-            }
-            let light = Vec3x8::splat(samples[first].lights.get(i).color);
-            color = Vec3x8::select(lane_mask(seen), color + light * c, color);
+            hits.add_light(&mut color, &toward, lit & !blocked, light);
         }
         color.lanes()
-    }
-}
-
-/// The materials of a packet's hits in lanes, gathered once a packet (one load where every live lane
-/// hit the same material, the usual case).
-struct Materials {
-    kd: f32x8,
-    ks: f32x8,
-    shininess: [f32; PACKET],
-    diffuse: Vec3x8,
-    specular: Vec3x8,
-    /// The lanes whose material has a highlight (Ks > 0).
-    glossy: u8,
-}
-
-impl Materials {
-    /// The materials at `surfaces` (`first` live), dead lanes given `first`'s.
-    fn gather(scene: &Scene, surfaces: &PerRay<Option<Surface>>, first: usize) -> Self {
-        let id = |k: usize| surfaces[k].as_ref().map(|s| s.material);
-        let one = id(first).expect("a live lane");
-        let ids: PerRay<MaterialId> = std::array::from_fn(|k| id(k).unwrap_or(one));
-        let glossy = |m: &Material| m.ks > 0.0;
-        if ids.iter().all(|&i| i == one) {
-            let m = &scene.materials[one as usize];
-            return Materials {
-                kd: f32x8::splat(m.kd),
-                ks: f32x8::splat(m.ks),
-                shininess: [m.shininess; PACKET],
-                diffuse: Vec3x8::splat(m.diffuse),
-                specular: Vec3x8::splat(m.specular),
-                glossy: if glossy(m) { !0 } else { 0 },
-            };
-        }
-        let m = ids.map(|i| &scene.materials[i as usize]);
-        Materials {
-            kd: f32x8::from(m.map(|m| m.kd)),
-            ks: f32x8::from(m.map(|m| m.ks)),
-            shininess: m.map(|m| m.shininess),
-            diffuse: Vec3x8::from_lanes(&m.map(|m| m.diffuse)),
-            specular: Vec3x8::from_lanes(&m.map(|m| m.specular)),
-            glossy: m
-                .iter()
-                .enumerate()
-                .fold(0, |g, (k, m)| g | u8::from(glossy(m)) << k),
-        }
     }
 }
 

@@ -9,24 +9,29 @@
 //! The image is the single-ray path's, bit for bit. Each pixel sample walks its ray tree depth first, as
 //! [`Whitted::trace`] recurses (a hit's bounce, then its refracted ray's tree, then its reflected ray's),
 //! and puts one ray into each generation's stream: its next ray in that order. So its random numbers
-//! (fuzzy reflections) are drawn and its split budget spent in the single-ray order; a hit's colour is
-//! [`Whitted::shade_surface`] of the same rays, once its shadow rays and its children's colours are
-//! back; a pixel's samples are summed in sample order.
+//! (fuzzy reflections) are drawn and its split budget spent in the single-ray order. A generation's
+//! hits are shaded eight at a time in lanes (`shade.rs`: the shadow rays' set-up and Blinn-Phong, the
+//! single-ray path's operations in its order), and a hit's colour is finished by
+//! [`Whitted::add_bounces`] once its children's colours are back; a pixel's samples are summed in
+//! sample order.
 
 use std::cell::RefCell;
 
 use glam::Vec3;
 
-use super::{BLOCK_H, BLOCK_W, TilePixels, coherent};
+use super::shade::{HitLanes, light};
+use super::{BLOCK_H, BLOCK_W, PerRay, TilePixels, coherent};
 use crate::accel::counters::{self, Steps};
-use crate::accel::packet::first;
+use crate::accel::packet::{bits, first};
 use crate::accel::policy::HitPolicy;
 use crate::accel::{Counting, Hit, PACKET, Plain, Surface, Tally};
 use crate::geometry::ray::Ray;
+use crate::render::lanes::Vec3x8;
+use crate::render::light::Lights;
 use crate::render::renderer::Renderer;
 use crate::render::sampler::PixelPattern;
 use crate::render::tiles::{TILE, Tile};
-use crate::render::whitted::{Bounces, PixelSample, RayCounts, RayKind, ShadowRay, charge, take_steps};
+use crate::render::whitted::{Bounces, PixelSample, RayCounts, RayKind, charge, take_steps};
 
 /// The most pixel samples in flight at once: past this (many samples per pixel), a set of tiles is
 /// traced in batches of whole pixels' samples, so that a worker's state stays bounded (about 130 bytes
@@ -51,8 +56,8 @@ struct RayNode {
     /// Where its closest hit lies (`None`: it left the scene).
     surface: Option<Surface>,
     bounces: Bounces,
-    /// Its shadow rays' answers, from here on in the batch's list, in light order.
-    shadows: usize,
+    /// The colour its hit gets from the light samples (Blinn-Phong over those not in shadow).
+    local: Vec3,
     /// What its refracted and reflected rays see.
     seen: [Vec3; 2],
 }
@@ -94,7 +99,12 @@ struct StreamBuffers {
     stream_t: Vec<f32>,
     stream_hits: Vec<Hit>,
     stream_blocked: Vec<bool>,
+    /// The generation's shadow rays' answers, in the order they were queued.
     blocked: Vec<bool>,
+    /// The generation's nodes whose rays hit something, in queue order, and their hits in lanes,
+    /// eight a [`HitLanes`].
+    hit_nodes: Vec<u32>,
+    lanes: Vec<HitLanes>,
 }
 
 impl StreamBuffers {
@@ -218,7 +228,7 @@ impl Renderer<'_> {
             b.order.extend(0..b.rays.len() as u32);
             b.runs.clear();
             b.runs.push(b.rays.len() as u32);
-            self.trace_split::<false>(b, 0);
+            self.trace_split::<false>(b);
             if whitted.counts() {
                 for (j, &n) in b.queue.iter().enumerate() {
                     let node = &b.nodes[n as usize];
@@ -229,12 +239,8 @@ impl Renderer<'_> {
                     charge(walks[node.sample as usize].sample.slot, kind, b.steps[j]);
                 }
             }
-            // Each hit's surface, bounces (in each sample's single-ray order: one ray a sample) and
-            // shadow rays.
-            b.shadow_rays.clear();
-            b.shadow_t.clear();
-            b.shadow_light.clear();
-            b.shadow_owner.clear();
+            // Each hit's surface and bounces (in each sample's single-ray order: one ray a sample).
+            b.hit_nodes.clear();
             for (j, &n) in b.queue.iter().enumerate() {
                 let node = &mut b.nodes[n as usize];
                 let hit = b.hits[j];
@@ -247,24 +253,60 @@ impl Renderer<'_> {
                 node.bounces = whitted.bounces(&node.ray, &s, node.depth, &mut walk.sample);
                 walk.sample.rays.add_bounces(&node.bounces);
                 node.surface = Some(s);
-                node.shadows = b.blocked.len() + b.shadow_rays.len();
-                for (i, light) in walk.sample.lights.iter().enumerate() {
-                    if let Some(shadow) = ShadowRay::new(s.point, s.geometric, s.shading, &light) {
-                        b.shadow_rays.push(shadow.ray);
-                        b.shadow_t.push(shadow.distance);
+                b.hit_nodes.push(n);
+            }
+            // Their shadow rays, eight hits at a time and light sample by light sample, set up in
+            // lanes.
+            b.shadow_rays.clear();
+            b.shadow_t.clear();
+            b.shadow_light.clear();
+            b.shadow_owner.clear();
+            b.lanes.clear();
+            for eight in b.hit_nodes.chunks(PACKET) {
+                let hits = self.hit_lanes(eight, &b.nodes);
+                let lights = lights_of(eight, &b.nodes, walks);
+                for i in 0..lights[0].len() {
+                    let toward = hits.toward(light(i, &lights).0);
+                    if toward.lit == 0 {
+                        continue;
+                    }
+                    let (rays, distance) = hits.shadow_rays(&toward);
+                    for k in bits(toward.lit) {
+                        let sample = b.nodes[eight[k] as usize].sample;
+                        b.shadow_rays.push(rays[k]);
+                        b.shadow_t.push(distance[k]);
                         b.shadow_light.push(i as u32);
-                        b.shadow_owner.push(node.sample);
+                        b.shadow_owner.push(sample);
+                        walks[sample as usize].sample.rays.shadow += 1;
                     }
                 }
-                walk.sample.rays.shadow += (b.blocked.len() + b.shadow_rays.len() - node.shadows) as u64;
+                b.lanes.push(hits);
             }
-            let start = b.blocked.len();
-            b.blocked.resize(start + b.shadow_rays.len(), false);
+            b.blocked.clear();
+            b.blocked.resize(b.shadow_rays.len(), false);
             by_light(b);
-            self.trace_split::<true>(b, start);
+            self.trace_split::<true>(b);
             if whitted.counts() {
                 for (j, &owner) in b.shadow_owner.iter().enumerate() {
                     charge(walks[owner as usize].sample.slot, RayKind::Shadow, b.steps[j]);
+                }
+            }
+            // The hits' local colours: the same shadow rays set up again, their answers read in the
+            // order they were queued in.
+            let mut answer = b.blocked.iter();
+            for (eight, hits) in b.hit_nodes.chunks(PACKET).zip(&b.lanes) {
+                let lights = lights_of(eight, &b.nodes, walks);
+                let mut color = Vec3x8::ZERO;
+                for i in 0..lights[0].len() {
+                    let (at, light) = light(i, &lights);
+                    let toward = hits.toward(at);
+                    let blocked = bits(toward.lit).fold(0u8, |m, k| {
+                        m | u8::from(*answer.next().expect("an answer a shadow ray")) << k
+                    });
+                    hits.add_light(&mut color, &toward, toward.lit & !blocked, light);
+                }
+                for (&n, local) in eight.iter().zip(color.lanes()) {
+                    b.nodes[n as usize].local = local;
                 }
             }
             // Each sample's next ray, or its finished rays' colours, up its tree.
@@ -279,20 +321,19 @@ impl Renderer<'_> {
     }
 
     /// Traces the rays of `b.order`, run by run (`b.runs`: where each ends): the generation's rays
-    /// (closest hits into `b.hits`) or, with `ANY`, its shadow rays (answers into `b.blocked` from
-    /// `start` on). Each run is cut into chunks of eight; a chunk that is [`coherent`] is traced as a
+    /// (closest hits into `b.hits`) or, with `ANY`, its shadow rays (answers into `b.blocked`). Each run is cut into chunks of eight; a chunk that is [`coherent`] is traced as a
     /// packet (the packet driver's rule), the others' rays together as one stream.
-    fn trace_split<const ANY: bool>(&self, b: &mut StreamBuffers, start: usize) {
+    fn trace_split<const ANY: bool>(&self, b: &mut StreamBuffers) {
         if self.whitted.counts() {
-            self.trace_runs::<ANY, Counting>(b, start);
+            self.trace_runs::<ANY, Counting>(b);
         } else {
-            self.trace_runs::<ANY, Plain>(b, start);
+            self.trace_runs::<ANY, Plain>(b);
         }
     }
 
     /// [`Renderer::trace_split`] through the verbs of `T`: counting ones leave each ray's steps in
     /// `b.steps`.
-    fn trace_runs<const ANY: bool, T: Tally>(&self, b: &mut StreamBuffers, start: usize) {
+    fn trace_runs<const ANY: bool, T: Tally>(&self, b: &mut StreamBuffers) {
         let accel = self.whitted.accel.verbs::<T>();
         let count = T::Closest::COUNT;
         let rays = if ANY { &b.shadow_rays } else { &b.rays };
@@ -317,7 +358,7 @@ impl Renderer<'_> {
                         std::array::from_fn(|k| ids.get(k).map_or(0.0, |&j| b.shadow_t[j as usize]));
                     let blocked = accel.occluded_packet(&packet, first(ids.len()), 0.0, &t_max);
                     for (k, &j) in ids.iter().enumerate() {
-                        b.blocked[start + j as usize] = blocked >> k & 1 == 1;
+                        b.blocked[j as usize] = blocked >> k & 1 == 1;
                     }
                 } else {
                     let mut hits = [Hit::miss(f32::INFINITY); PACKET];
@@ -345,7 +386,7 @@ impl Renderer<'_> {
             b.stream_blocked.resize(b.stream.len(), false);
             accel.occluded_stream(&b.stream_rays, 0.0, &b.stream_t, &mut b.stream_blocked);
             for (&j, &blocked) in b.stream.iter().zip(&b.stream_blocked) {
-                b.blocked[start + j as usize] = blocked;
+                b.blocked[j as usize] = blocked;
             }
         } else {
             b.stream_hits.clear();
@@ -360,6 +401,17 @@ impl Renderer<'_> {
                 b.steps[j as usize] = counters::lane(i);
             }
         }
+    }
+
+    /// The hits of nodes `eight` (up to eight, each with a surface) in lanes.
+    fn hit_lanes(&self, eight: &[u32], nodes: &[RayNode]) -> HitLanes {
+        let mut surfaces = [None; PACKET];
+        let mut dirs = [Vec3::ZERO; PACKET];
+        for (k, &n) in eight.iter().enumerate() {
+            let node = &nodes[n as usize];
+            (surfaces[k], dirs[k]) = (node.surface.as_ref(), node.ray.dir);
+        }
+        HitLanes::new(self.whitted.scene(), &dirs, &surfaces).expect("hits")
     }
 
     /// After node `n`'s hit and shadow rays are back, or its child in `slot - 1` has its colour:
@@ -388,20 +440,9 @@ impl Renderer<'_> {
                 None => self
                     .whitted
                     .shade(&node.ray, &Hit::miss(f32::INFINITY), depth, &mut walk.sample),
-                Some(s) => {
-                    let (mut shadow, blocked) = (node.shadows, &b.blocked);
-                    self.whitted.shade_surface(
-                        &node.ray,
-                        s,
-                        &node.bounces,
-                        &walk.sample.lights,
-                        &mut |_, _| {
-                            shadow += 1;
-                            blocked[shadow - 1]
-                        },
-                        &mut |i, _| node.seen[i],
-                    )
-                }
+                Some(s) => self
+                    .whitted
+                    .add_bounces(node.local, s, &node.bounces, &mut |i, _| node.seen[i]),
             };
             b.free.push(n);
             if parent == NONE {
@@ -412,6 +453,13 @@ impl Renderer<'_> {
             b.nodes[n as usize].seen[slot as usize] = color;
         }
     }
+}
+
+/// The lights of the samples of nodes `eight` (up to eight; a dead lane gets the first's).
+fn lights_of<'s>(eight: &[u32], nodes: &[RayNode], walks: &[Walk<'s>]) -> PerRay<Lights<'s>> {
+    let lights = |n: u32| walks[nodes[n as usize].sample as usize].sample.lights;
+    let first = lights(eight[0]);
+    std::array::from_fn(|k| eight.get(k).map_or(first, |&n| lights(n)))
 }
 
 /// Puts the generation's shadow rays in order of light, one run per light (a counting sort: stable, so
@@ -449,7 +497,7 @@ fn root(ray: Ray, sample: u32) -> RayNode {
         slot: 0,
         surface: None,
         bounces: Bounces::default(),
-        shadows: 0,
+        local: Vec3::ZERO,
         seen: [Vec3::ZERO; 2],
     }
 }
