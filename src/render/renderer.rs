@@ -33,6 +33,9 @@ pub struct Renderer<'a> {
     pub(super) options: Options,
     /// The seed, mixed once for every pixel's generators ([`PixelKey`]).
     seed_key: u64,
+    /// Whether a pixel sample's own generator is ever drawn from (a lens, or a rough mirror): where it
+    /// is not, it is not seeded either, and the image is the same.
+    draws: bool,
     /// What the renderer fell back on (a skybox that did not load, say), for the user to see.
     pub warnings: Vec<String>,
 }
@@ -80,6 +83,14 @@ impl<'a> Renderer<'a> {
             options.roughness,
             options.spd,
         );
+        let camera = if options.spd {
+            // Corners 0..=w of a w-pixel-wide image: the camera of the image, rays at whole pixel
+            // coordinates.
+            RayCamera::new(camera, options.width.max(2) - 1, options.height.max(2) - 1)
+        } else {
+            RayCamera::new(camera, options.width, options.height)
+        };
+        let draws = camera.has_lens() || whitted.has_rough_mirrors();
         let whitted = if options.count_steps {
             whitted.counting()
         } else {
@@ -88,16 +99,11 @@ impl<'a> Renderer<'a> {
         Renderer {
             whitted,
             // At spp 0 the camera rays go through the pixel centres from the eye (a pinhole).
-            camera: if options.spd {
-                // Corners 0..=w of a w-pixel-wide image: the camera of the image, rays at whole
-                // pixel coordinates.
-                RayCamera::new(camera, options.width.max(2) - 1, options.height.max(2) - 1)
-            } else {
-                RayCamera::new(camera, options.width, options.height)
-            },
+            camera,
             side,
             centre: if options.spd { 0.0 } else { 0.5 },
             seed_key: mix(options.seed),
+            draws,
             options,
             warnings,
         }
@@ -130,7 +136,11 @@ impl<'a> Renderer<'a> {
     pub(super) fn pixel_sample(&self, pass: u32, pixel: PixelKey, s: u32, uv: Vec2) -> PixelSample<'_> {
         PixelSample {
             lights: self.whitted.lights(uv),
-            rng: Sampler::of_pixel(pixel, pass, 1 + s),
+            rng: if self.draws {
+                Sampler::of_pixel(pixel, pass, 1 + s)
+            } else {
+                Sampler::unused()
+            },
             rays: SampleRays::default(),
             slot: 0,
         }
@@ -156,7 +166,7 @@ impl<'a> Renderer<'a> {
             return (corner + self.centre, None, sample);
         }
         let (p, uv) = match self.side {
-            1 => PixelPattern::single(key, pass),
+            1 => PixelPattern::single(key, pass, self.whitted.samples_quads()),
             _ => (pattern.pixel[s as usize], pattern.light[s as usize]),
         };
         let mut sample = self.pixel_sample(pass, key, s, uv);
@@ -166,7 +176,9 @@ impl<'a> Renderer<'a> {
         let lens = if self.camera.has_lens() {
             Some(sample.rng.in_unit_disc())
         } else {
-            sample.rng.next2();
+            if self.draws {
+                sample.rng.next2();
+            }
             None
         };
         (corner + p, lens, sample)

@@ -55,6 +55,15 @@ impl Sampler {
         }
     }
 
+    /// A generator for a pixel sample that never draws (no lens, no rough mirror), not seeded: its
+    /// numbers would be those of a fixed state, the same for every sample.
+    #[inline]
+    pub fn unused() -> Self {
+        Sampler {
+            rng: Xoshiro256pp { s: [1, 2, 3, 4] },
+        }
+    }
+
     /// Uniform in [0, 1): the top 24 bits of the next output, so every value is exact in `f32`.
     #[inline]
     pub fn uniform(&mut self) -> f32 {
@@ -169,12 +178,14 @@ impl PixelPattern {
     }
 
     /// The one sample of a 1 × 1 pattern, [`fill`](Self::fill)'s numbers without its buffers: the
-    /// offset in the pixel and the light point (cell 0 scaled by 1: the numbers themselves, bit for bit).
+    /// offset in the pixel and the light point (cell 0 scaled by 1: the numbers themselves, bit for
+    /// bit). Without `quads` to sample, the light point is not drawn (the centre stands in: nothing
+    /// reads it, and the pattern's generator draws nothing after it).
     #[inline]
-    pub fn single(pixel: PixelKey, pass: u32) -> (Vec2, Vec2) {
+    pub fn single(pixel: PixelKey, pass: u32, quads: bool) -> (Vec2, Vec2) {
         let mut rng = Sampler::of_pixel(pixel, pass, PATTERN_STREAM);
         let offset = rng.next2();
-        (offset, rng.next2())
+        (offset, if quads { rng.next2() } else { Vec2::splat(0.5) })
     }
 }
 
@@ -265,13 +276,14 @@ mod tests {
         for pixel in 0..100u64 {
             let key = PixelKey::new(mix(9), pixel);
             p.fill(1, key, 3);
-            let (offset, light) = PixelPattern::single(key, 3);
+            let (offset, light) = PixelPattern::single(key, 3, true);
             assert_eq!((offset, light), (p.pixel[0], p.light[0]));
+            assert_eq!(PixelPattern::single(key, 3, false).0, offset);
             let (mut a, mut b) = (Sampler::new(9, 3, pixel, 5), Sampler::of_pixel(key, 3, 5));
             assert_eq!(a.rng.next_u64(), b.rng.next_u64());
         }
         // The numbers themselves: in [0, 1), and not the same for every pixel.
-        let single = |pixel| PixelPattern::single(PixelKey::new(mix(9), pixel), 3);
+        let single = |pixel| PixelPattern::single(PixelKey::new(mix(9), pixel), 3, true);
         let (a, b) = (single(0), single(1));
         assert_ne!(a.0, b.0);
         assert!(a.0.min_element() >= 0.0 && a.1.max_element() < 1.0);

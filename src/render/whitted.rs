@@ -532,6 +532,17 @@ impl<'a> Whitted<'a> {
         color
     }
 
+    /// Whether some material has a roughness: where it reflects, its mirror rays draw from the pixel
+    /// sample's generator ([`fuzz`]).
+    pub(super) fn has_rough_mirrors(&self) -> bool {
+        self.roughness.iter().any(|&r| r > 0.0)
+    }
+
+    /// Whether pixel samples sample quad lights at their own points (soft shadows).
+    pub(super) fn samples_quads(&self) -> bool {
+        !self.quads.is_empty()
+    }
+
     /// The scene shaded.
     pub(super) fn scene(&self) -> &Scene {
         self.scene

@@ -114,11 +114,7 @@ impl Whitted<'_> {
         surfaces: &PerRay<Option<Surface>>,
         samples: &mut PerRay<PixelSample>,
     ) -> PerRay<Vec3> {
-        let Some(hits) = HitLanes::new(
-            self.scene(),
-            &rays.map(|r| r.dir),
-            &surfaces.each_ref().map(Option::as_ref),
-        ) else {
+        let Some(hits) = HitLanes::new(self.scene(), |k| rays[k].dir, |k| surfaces[k].as_ref()) else {
             return [Vec3::ZERO; PACKET];
         };
         let lights = samples.each_ref().map(|s| s.lights);
@@ -184,41 +180,42 @@ fn blocked_counted(
 impl Renderer<'_> {
     /// Sample `s` of the pixels of a packet's `active` lanes (lane `k` at `pixel(k)`, its pattern
     /// `patterns[k]`): their camera rays, a pinhole's eight at once ([`RayCamera::rays8`]), and what
-    /// each carries, its slot its lane.
+    /// each carries, its slot its lane, written in place into the block's `rays` and `samples`.
     ///
     /// [`RayCamera::rays8`]: crate::render::camera::RayCamera::rays8
     // Not inlined: a phase of `profiles/frame.sh`, called once a packet.
     #[inline(never)]
-    fn camera_packet(
-        &self,
+    fn camera_packet<'s>(
+        &'s self,
         pixel: impl Fn(usize) -> (u32, u32),
         active: u8,
         pass: u32,
         s: u32,
         patterns: &PerRay<PixelPattern>,
-    ) -> (PerRay<Ray>, PerRay<PixelSample<'_>>) {
+        (rays, samples): (&mut PerRay<Ray>, &mut PerRay<PixelSample<'s>>),
+    ) {
         let mut at = [Vec2::ZERO; PACKET];
         let mut lens = [None; PACKET];
-        let samples = std::array::from_fn(|k| {
-            if active >> k & 1 == 0 {
-                return self.pixel_sample(pass, self.pixel_key(0, 0), 0, Vec2::ZERO);
-            }
-            let (x, y) = pixel(k);
-            let (point, lens_point, sample) = self.sample_start(x, y, pass, s, &patterns[k]);
-            (at[k], lens[k]) = (point, lens_point);
-            PixelSample {
-                slot: k as u32,
-                ..sample
-            }
-        });
+        for (k, sample) in samples.iter_mut().enumerate() {
+            *sample = if active >> k & 1 == 0 {
+                self.pixel_sample(pass, self.pixel_key(0, 0), 0, Vec2::ZERO)
+            } else {
+                let (x, y) = pixel(k);
+                let (point, lens_point, sample) = self.sample_start(x, y, pass, s, &patterns[k]);
+                (at[k], lens[k]) = (point, lens_point);
+                PixelSample {
+                    slot: k as u32,
+                    ..sample
+                }
+            };
+        }
         let camera = self.camera();
-        let mut rays = camera.rays8(at.map(|p| p.x), at.map(|p| p.y));
+        *rays = camera.rays8(at.map(|p| p.x), at.map(|p| p.y));
         for k in bits(active) {
             if let Some(lens) = lens[k] {
                 rays[k] = camera.lens_ray(at[k].x, at[k].y, lens);
             }
         }
-        (rays, samples)
     }
 
     /// Shades `tile` for pass `pass`, packet by packet (pixels outside the image are inactive lanes),
@@ -234,6 +231,10 @@ impl Renderer<'_> {
         mut pixels: Option<&mut [RayCounts]>,
     ) {
         let mut patterns: PerRay<PixelPattern> = Default::default();
+        // Filled in place for each sample of each block (built here once: no copy of the eight).
+        let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
+        let mut samples: PerRay<PixelSample> =
+            std::array::from_fn(|_| self.pixel_sample(pass, self.pixel_key(0, 0), 0, Vec2::ZERO));
         for y0 in (tile.y0..tile.y1).step_by(BLOCK_H as usize) {
             for x0 in (tile.x0..tile.x1).step_by(BLOCK_W as usize) {
                 let pixel = |k: usize| (x0 + k as u32 % BLOCK_W, y0 + k as u32 / BLOCK_W);
@@ -247,7 +248,7 @@ impl Renderer<'_> {
                 }
                 let mut sums = [Vec3::ZERO; PACKET];
                 for s in 0..self.samples() {
-                    let (rays, mut samples) = self.camera_packet(pixel, active, pass, s, &patterns);
+                    self.camera_packet(pixel, active, pass, s, &patterns, (&mut rays, &mut samples));
                     let colors = self
                         .whitted
                         .shade_packet(&rays, active, 0, RayKind::Camera, &mut samples);

@@ -45,15 +45,21 @@ pub(super) struct ShadowLanes {
 }
 
 impl HitLanes {
-    /// The hits `surfaces` (none: a dead lane) of rays with directions `dirs`; `None` if no lane
-    /// holds a hit.
-    #[inline]
-    pub fn new(scene: &Scene, dirs: &PerRay<Vec3>, surfaces: &PerRay<Option<&Surface>>) -> Option<Self> {
+    /// The hits `surface(k)` (none: a dead lane) of rays with directions `dir(k)`; `None` if no
+    /// lane holds a hit. Inlined into its callers, so that the eight hits go straight from where
+    /// they lie into the lanes.
+    #[inline(always)]
+    pub fn new<'s>(
+        scene: &Scene,
+        dir: impl Fn(usize) -> Vec3,
+        surface: impl Fn(usize) -> Option<&'s Surface>,
+    ) -> Option<Self> {
         let (mut p, mut ng, mut ns) = ([Vec3::ZERO; PACKET], [Vec3::ZERO; PACKET], [Vec3::ZERO; PACKET]);
+        let mut ids = [MaterialId::MAX; PACKET];
         let mut live = 0u8;
-        for (k, s) in surfaces.iter().enumerate() {
-            if let Some(s) = s {
-                (p[k], ng[k], ns[k]) = (s.point, s.geometric, s.shading);
+        for k in 0..PACKET {
+            if let Some(s) = surface(k) {
+                (p[k], ng[k], ns[k], ids[k]) = (s.point, s.geometric, s.shading, s.material);
                 live |= 1 << k;
             }
         }
@@ -62,8 +68,8 @@ impl HitLanes {
             p: Vec3x8::from_lanes(&p),
             ng: Vec3x8::from_lanes(&ng),
             ns: Vec3x8::from_lanes(&ns),
-            v: -Vec3x8::from_lanes(dirs),
-            m: Materials::gather(scene, surfaces, first),
+            v: -Vec3x8::from_lanes(&std::array::from_fn(dir)),
+            m: Materials::gather(scene, &ids, ids[first]),
             live,
         })
     }
@@ -142,11 +148,10 @@ struct Materials {
 }
 
 impl Materials {
-    /// The materials at `surfaces` (`first` live), dead lanes given `first`'s.
-    fn gather(scene: &Scene, surfaces: &PerRay<Option<&Surface>>, first: usize) -> Self {
-        let id = |k: usize| surfaces[k].map(|s| s.material);
-        let one = id(first).expect("a live lane");
-        let ids: PerRay<MaterialId> = std::array::from_fn(|k| id(k).unwrap_or(one));
+    /// The materials `ids` (`MaterialId::MAX`: a dead lane, given `one`'s, a live lane's).
+    #[inline(always)]
+    fn gather(scene: &Scene, ids: &PerRay<MaterialId>, one: MaterialId) -> Self {
+        let ids = ids.map(|i| if i == MaterialId::MAX { one } else { i });
         let glossy = |m: &Material| m.ks > 0.0;
         if ids.iter().all(|&i| i == one) {
             let m = &scene.materials[one as usize];

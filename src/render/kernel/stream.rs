@@ -405,13 +405,13 @@ impl Renderer<'_> {
 
     /// The hits of nodes `eight` (up to eight, each with a surface) in lanes.
     fn hit_lanes(&self, eight: &[u32], nodes: &[RayNode]) -> HitLanes {
-        let mut surfaces = [None; PACKET];
-        let mut dirs = [Vec3::ZERO; PACKET];
-        for (k, &n) in eight.iter().enumerate() {
-            let node = &nodes[n as usize];
-            (surfaces[k], dirs[k]) = (node.surface.as_ref(), node.ray.dir);
-        }
-        HitLanes::new(self.whitted.scene(), &dirs, &surfaces).expect("hits")
+        let node = |k: usize| eight.get(k).map(|&n| &nodes[n as usize]);
+        HitLanes::new(
+            self.whitted.scene(),
+            |k| node(k).map_or(Vec3::Z, |n| n.ray.dir),
+            |k| node(k).and_then(|n| n.surface.as_ref()),
+        )
+        .expect("hits")
     }
 
     /// After node `n`'s hit and shadow rays are back, or its child in `slot - 1` has its colour:
