@@ -170,9 +170,9 @@ impl<'a> Renderer<'a> {
             _ => (pattern.pixel[s as usize], pattern.light[s as usize]),
         };
         let mut sample = self.pixel_sample(pass, key, s, uv);
-        // The lens point's two numbers are drawn even for a pinhole, so that a sample's later random
-        // numbers do not depend on the camera; only a lens maps them onto the disc (the map's sine
-        // and cosine were a third of a pinhole camera ray's instructions: profiles/frame.txt).
+        // The lens point's two numbers are drawn even for a pinhole (where a rough mirror draws
+        // later), so that a sample's later random numbers do not depend on the camera; only a lens
+        // maps them onto the disc (its sine and cosine would cost a pinhole ray: profiles/README.md).
         let lens = if self.camera.has_lens() {
             Some(sample.rng.in_unit_disc())
         } else {
