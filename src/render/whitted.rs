@@ -172,7 +172,7 @@ impl RayCounts {
 }
 
 /// The rays one pixel sample traced, by kind: [`RayCounts`] without the steps, which a counting
-/// render keeps apart ([`charge`]), so that a sample carries no more than it did before counting.
+/// render keeps apart (`charge`), so that a sample carries no more than it did before counting.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SampleRays {
     /// Camera rays.
@@ -247,7 +247,7 @@ pub struct PixelSample<'a> {
     pub rng: Sampler,
     /// Rays traced for this sample so far.
     pub rays: SampleRays,
-    /// Where a counting render keeps this sample's steps ([`charge`]): unique among the samples a
+    /// Where a counting render keeps this sample's steps (`charge`): unique among the samples a
     /// worker has in flight.
     pub slot: u32,
 }

@@ -69,7 +69,7 @@ impl<'a> Bvh2<'a> {
         Self::with_block(prims, builder, 1)
     }
 
-    /// Builds the tree for leaves that test `block` primitives at the cost of one (see [`build`]).
+    /// Builds the tree for leaves that test `block` primitives at the cost of one (see [`Bvh2::build`]).
     pub fn with_block(prims: Prims<'a>, builder: Builder, block: usize) -> Self {
         let (nodes, ids) = build(&prims, builder, block);
         Bvh2 { prims, nodes, ids }
@@ -86,7 +86,7 @@ impl<'a> Bvh2<'a> {
         if options.reinsert { bvh.reinserted() } else { bvh }
     }
 
-    /// The tree after insertion-based optimization ([`reinsert`]): the same leaves under interior
+    /// The tree after insertion-based optimization (`reinsert.rs`): the same leaves under interior
     /// nodes of less summed area. Unchanged where no move pays, or where the moves would deepen the
     /// tree past [`MAX_TREE_DEPTH`].
     pub fn reinserted(self) -> Self {

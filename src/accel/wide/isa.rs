@@ -8,7 +8,7 @@ use super::lanes::OnLanes8;
 #[cfg(target_arch = "x86_64")]
 use super::lanes::{run_avx2, run_avx512};
 
-/// The instruction sets a wide BVH's kernels can run on (the public name of a choice; [`Simd`] is the
+/// The instruction sets a wide BVH's kernels can run on (the public name of a choice; `Simd` is the
 /// checked one).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Isa {

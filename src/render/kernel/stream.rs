@@ -14,6 +14,9 @@
 //! single-ray path's operations in its order), and a hit's colour is finished by
 //! [`Whitted::add_bounces`] once its children's colours are back; a pixel's samples are summed in
 //! sample order.
+//!
+//! [`Whitted::trace`]: crate::render::whitted::Whitted::trace
+//! [`Whitted::add_bounces`]: crate::render::whitted::Whitted::add_bounces
 
 use std::cell::RefCell;
 

@@ -155,7 +155,7 @@ impl<L: Lanes8> Lanes<16> for Twice<L> {
     }
 }
 
-/// A kernel over eight-lane vectors, for [`Simd::run8`] to run on the lane type it chose.
+/// A kernel over eight-lane vectors, for `Simd::run8` to run on the lane type it chose.
 pub(super) trait OnLanes8 {
     type Output;
     fn run<L: Lanes8>(self) -> Self::Output;
