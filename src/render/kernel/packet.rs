@@ -59,17 +59,20 @@ impl Whitted<'_> {
         for (sample, b) in samples.iter_mut().zip(&bounces) {
             sample.rays.add_bounces(b);
         }
-        // What the refracted (0) and reflected (1) rays see, each kind as one packet.
+        // What the refracted (0) and reflected (1) rays see, each kind as one packet (the lanes of
+        // `mask`; the others keep whatever ray they held, never traced).
         let mut seen = [[Vec3::ZERO; PACKET]; 2];
+        let mut next = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
         for (i, seen) in seen.iter_mut().enumerate() {
-            let mut next = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
             let mut mask = 0u8;
             for (k, b) in bounces.iter().enumerate() {
-                if let Some((r, _)) = [b.refracted, b.reflected][i] {
-                    (next[k], mask) = (r, mask | 1 << k);
+                if let Some((r, _)) = if i == 0 { &b.refracted } else { &b.reflected } {
+                    (next[k], mask) = (*r, mask | 1 << k);
                 }
             }
-            *seen = self.trace_lanes(&next, mask, depth + 1, RayKind::secondary(i), samples);
+            if mask != 0 {
+                *seen = self.trace_lanes(&next, mask, depth + 1, RayKind::secondary(i), samples);
+            }
         }
 
         let mut out = [Vec3::ZERO; PACKET];
