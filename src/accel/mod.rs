@@ -2,10 +2,10 @@
 //! along a ray and whether anything lies on a segment, for one ray (`intersect`, `occluded`), a packet
 //! of eight (`intersect_packet`, `occluded_packet`) or a stream of any number (`intersect_stream`,
 //! `occluded_stream`), and the closest hit of a coherent single ray (`intersect_coherent`, a camera
-//! ray: the same answer by steps that pay for such rays): seven verbs, dispatched in one place over the
-//! [`Structure`] trait, whose packet and stream verbs default to ray by ray. That shared interface is what lets every structure be
-//! checked against brute force with one loop, and lets the renderer send packets and streams without
-//! knowing which structure answers them.
+//! ray: the same answer by steps that pay for such rays): seven verbs, dispatched in one place over
+//! the [`Structure`] trait, whose packet and stream verbs default to ray by ray. That shared interface
+//! is what lets every structure be checked against brute force with one loop, and lets the renderer
+//! send packets and streams without knowing which structure answers them.
 
 pub mod brute;
 pub mod bvh2;

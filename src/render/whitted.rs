@@ -18,7 +18,7 @@ use super::optics::{beer, reflect, refract, schlick};
 use super::options::MAX_DEPTH;
 use super::sampler::Sampler;
 use crate::accel::counters::{self, Steps};
-use crate::accel::{Accel, Hit, Prims, Surface};
+use crate::accel::{Accel, Hit, Plain, Prims, Surface, Tally, Verbs};
 use crate::geometry::ray::Ray;
 use crate::scene::{Material, QuadLight, Scene};
 
@@ -355,10 +355,8 @@ impl<'a> Whitted<'a> {
         let mut hit = Hit::miss(f32::INFINITY);
         if self.count {
             self.closest_counted(ray, kind, sample, &mut hit);
-        } else if kind == RayKind::Camera {
-            self.accel.intersect_coherent(ray, 0.0, &mut hit);
         } else {
-            self.accel.intersect(ray, 0.0, &mut hit);
+            closest(self.accel.verbs::<Plain>(), ray, kind, &mut hit);
         }
         self.shade(ray, &hit, depth, sample)
     }
@@ -367,12 +365,7 @@ impl<'a> Whitted<'a> {
     #[cold]
     #[inline(never)]
     fn closest_counted(&self, ray: &Ray, kind: RayKind, sample: &PixelSample, hit: &mut Hit) {
-        let verbs = self.accel.counting();
-        if kind == RayKind::Camera {
-            verbs.intersect_coherent(ray, 0.0, hit);
-        } else {
-            verbs.intersect(ray, 0.0, hit);
-        }
+        closest(self.accel.counting(), ray, kind, hit);
         charge(sample.slot, kind, counters::lane(0));
     }
 
@@ -543,11 +536,6 @@ impl<'a> Whitted<'a> {
         !self.quads.is_empty()
     }
 
-    /// The scene shaded.
-    pub(super) fn scene(&self) -> &Scene {
-        self.scene
-    }
-
     /// Blinn-Phong local colour: Σ C_light (Kd·Cd·max(0, n·L) + Ks·Cs·max(0, n·h)^shine), h = |L + V|,
     /// over the light samples whose shadow ray is not blocked.
     fn local(
@@ -576,6 +564,16 @@ impl<'a> Whitted<'a> {
             color += light.color * c;
         }
         color
+    }
+}
+
+/// The closest hit of `ray`, a ray of `kind`, through `verbs`: camera rays by the coherent verb.
+#[inline(always)]
+fn closest<T: Tally>(verbs: Verbs<'_, '_, T>, ray: &Ray, kind: RayKind, hit: &mut Hit) {
+    if kind == RayKind::Camera {
+        verbs.intersect_coherent(ray, 0.0, hit);
+    } else {
+        verbs.intersect(ray, 0.0, hit);
     }
 }
 

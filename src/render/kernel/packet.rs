@@ -117,7 +117,7 @@ impl Whitted<'_> {
         surfaces: &PerRay<Option<Surface>>,
         samples: &mut PerRay<PixelSample>,
     ) -> PerRay<Vec3> {
-        let Some(hits) = HitLanes::new(self.scene(), |k| rays[k].dir, |k| surfaces[k].as_ref()) else {
+        let Some(hits) = HitLanes::new(self.prims.scene, |k| rays[k].dir, |k| surfaces[k].as_ref()) else {
             return [Vec3::ZERO; PACKET];
         };
         let lights = samples.each_ref().map(|s| s.lights);
