@@ -2,9 +2,9 @@
 
 Reads `callgrind_annotate --inclusive=yes --tree=caller` output and the driver's ray counts, and prints
 each phase's inclusive instructions, its share of the frame and its instructions per ray of its kind.
-A phase is the inclusive cost of the functions it runs in: the accelerator's four verbs are never
+A phase is the inclusive cost of the functions it runs in: the accelerator's verbs are never
 inlined into the integrator (the packet verbs reach their AVX2 kernel through a `#[target_feature]`
-function, the single-ray verbs are too big), so traversal is measured exactly, and its ray kind is
+function, the single-ray closest-hit verbs are `#[inline(never)]`), so traversal is measured exactly, and its ray kind is
 told by the caller: the integrator's packet routine at its first level traces the camera rays, its
 recursive levels (callgrind's `'2`) the reflected and refracted ones.
 """
@@ -87,7 +87,11 @@ def main():
             called_by("Accel::intersect_packet", deeper) + inclusive("Accel::intersect"),
             "secondary",
         ),
-        ("hit points: position, normals, uv (Prims::surface)", inclusive("Prims::surface"), "all"),
+        (
+            "hit points: position, normals (HitLanes::of_hits, Prims::surface)",
+            inclusive("HitLanes::of_hits") + inclusive("Prims::surface"),
+            "all",
+        ),
         (
             "shading in lanes: shadow rays' set-up, Blinn-Phong (local_packet)",
             inclusive("::local_packet")

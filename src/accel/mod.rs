@@ -346,14 +346,15 @@ impl<'r, 'a, T: Tally> Verbs<'r, 'a, T> {
 
     /// Finds the closest hit with `t` in `(t_min, hit.t)`; updates `hit` and returns true if there is one.
     /// Every query of every accelerator searches ahead of the ray's origin: a negative `t_min` is 0.
-    #[inline]
+    // Not inlined, nor is `intersect_coherent`: `profiles/frame.sh` tells traversal by its callers.
+    #[inline(never)]
     pub fn intersect(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
         self.closest::<T::Closest>(ray, t_min, hit)
     }
 
     /// [`Verbs::intersect`] for a ray that takes much the way the ray traced before it took (a camera
     /// ray after its neighbour's): the same answer, by the steps that pay for such rays.
-    #[inline]
+    #[inline(never)]
     pub fn intersect_coherent(&self, ray: &Ray, t_min: f32, hit: &mut Hit) -> bool {
         self.closest::<T::Coherent>(ray, t_min, hit)
     }

@@ -242,10 +242,29 @@ impl<'a> Prims<'a> {
     }
 
     /// The surface at a hit.
+    // Not inlined: a phase of `profiles/frame.sh` (the single-ray path's hit points).
+    #[inline(never)]
     pub fn surface(&self, ray: &Ray, hit: &Hit) -> Surface {
-        let s = self.scene;
         let point = ray.at(hit.t);
-        let (geometric, shading, material) = match self.kind(hit.prim) {
+        let (geometric, shading, material) = self.normals(point, hit);
+        let inside = ray.dir.dot(geometric) > 0.0;
+        let sign = if inside { -1.0 } else { 1.0 };
+        Surface {
+            t: hit.t,
+            point,
+            geometric: sign * geometric,
+            shading: sign * shading,
+            material,
+            inside,
+        }
+    }
+
+    /// The geometric and shading normals (not yet turned toward the ray) and the material of `hit`,
+    /// at its `point`.
+    #[inline]
+    pub fn normals(&self, point: Vec3, hit: &Hit) -> (Vec3, Vec3, MaterialId) {
+        let s = self.scene;
+        match self.kind(hit.prim) {
             PrimKind::Sphere(i) => {
                 let sp = &s.spheres;
                 let n = sphere::normal(sp.center.get(i), sp.radius[i], point);
@@ -286,16 +305,6 @@ impl<'a> Prims<'a> {
                 let n = s.planes.normal.get(i);
                 (n, n, s.planes.material[i])
             }
-        };
-        let inside = ray.dir.dot(geometric) > 0.0;
-        let sign = if inside { -1.0 } else { 1.0 };
-        Surface {
-            t: hit.t,
-            point,
-            geometric: sign * geometric,
-            shading: sign * shading,
-            material,
-            inside,
         }
     }
 }

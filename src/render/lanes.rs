@@ -71,6 +71,55 @@ impl Vec3x8 {
         self * (f32x8::ONE / self.length())
     }
 
+    /// [`Vec3::cross`] in each lane.
+    #[inline]
+    pub fn cross(self, o: Self) -> Self {
+        Vec3x8 {
+            x: self.y * o.z - o.y * self.z,
+            y: self.z * o.x - o.z * self.x,
+            z: self.x * o.y - o.x * self.y,
+        }
+    }
+
+    /// [`Vec3::normalize_or_zero`] in each lane: zero where the length's reciprocal is not a finite
+    /// positive number.
+    #[inline]
+    pub fn normalize_or_zero(self) -> Self {
+        let rcp = f32x8::ONE / self.length();
+        let usable = rcp.simd_gt(f32x8::ZERO) & rcp.simd_lt(f32x8::splat(f32::INFINITY));
+        Vec3x8::select(usable, self * rcp, Vec3x8::ZERO)
+    }
+
+    /// The lanes whose three components are finite, as bits.
+    #[inline]
+    pub fn finite(self) -> u8 {
+        (self.x.is_finite() & self.y.is_finite() & self.z.is_finite()).to_bitmask() as u8
+    }
+
+    /// Lane `k` is `f(k)`.
+    #[inline(always)]
+    pub fn from_fn(f: impl Fn(usize) -> Vec3) -> Self {
+        let mut v = Vec3x8::ZERO;
+        for k in 0..8 {
+            v.set(k, f(k));
+        }
+        v
+    }
+
+    /// Lane `k`'s vector.
+    #[inline]
+    pub fn lane(&self, k: usize) -> Vec3 {
+        Vec3::new(self.x.as_array()[k], self.y.as_array()[k], self.z.as_array()[k])
+    }
+
+    /// Sets lane `k` to `v`, in place: a gather writes each lane's components where the lanes lie.
+    #[inline(always)]
+    pub fn set(&mut self, k: usize, v: Vec3) {
+        self.x.as_mut_array()[k] = v.x;
+        self.y.as_mut_array()[k] = v.y;
+        self.z.as_mut_array()[k] = v.z;
+    }
+
     /// Lane by lane, `self` where `mask` is set (all bits of the lane), else `other`.
     #[inline]
     pub fn select(mask: f32x8, a: Self, b: Self) -> Self {
@@ -187,6 +236,8 @@ mod tests {
                 (la * lb).lanes(),
                 (la * f32x8::from(ls)).lanes(),
                 la.normalize().lanes(),
+                la.cross(lb).lanes(),
+                la.normalize_or_zero().lanes(),
             ];
             let dot = la.dot(lb).to_array();
             let length = la.length().to_array();
@@ -198,14 +249,37 @@ mod tests {
                     a[k] * b[k],
                     a[k] * ls[k],
                     a[k].normalize(),
+                    a[k].cross(b[k]),
+                    a[k].normalize_or_zero(),
                 ];
                 for (got, want) in lanes.iter().zip(want) {
                     assert_eq!(bits(got[k]), bits(want), "lane {k}, scale {scale}");
                 }
                 assert_eq!(dot[k].to_bits(), a[k].dot(b[k]).to_bits());
                 assert_eq!(length[k].to_bits(), a[k].length().to_bits());
+                assert_eq!(bits(la.lane(k)), bits(a[k]));
+                let mut one = Vec3x8::from_fn(|j| b[j]);
+                one.set(k, a[k]);
+                assert_eq!(bits(one.lane(k)), bits(a[k]));
+                assert_eq!(bits(one.lane((k + 1) % 8)), bits(b[(k + 1) % 8]));
             }
         }
+        // Where the length's reciprocal is zero, infinite or NaN, glam's zero; non-finite lanes.
+        let odd = [
+            Vec3::ZERO,
+            Vec3::splat(1e-30),
+            Vec3::splat(f32::INFINITY),
+            Vec3::new(f32::NAN, 0.0, 1.0),
+            Vec3::new(3e38, 3e38, 0.0),
+            Vec3::X,
+            Vec3::new(0.0, -1e-20, 0.0),
+            Vec3::new(1.0, f32::NEG_INFINITY, 0.0),
+        ];
+        let lanes = Vec3x8::from_lanes(&odd);
+        for (k, (got, want)) in lanes.normalize_or_zero().lanes().iter().zip(odd).enumerate() {
+            assert_eq!(bits(*got), bits(want.normalize_or_zero()), "lane {k}");
+        }
+        assert_eq!(lanes.finite(), 0b0111_0011);
         let m = lane_mask(0b1010_0110);
         let picked = Vec3x8::select(m, Vec3x8::splat(Vec3::ONE), Vec3x8::ZERO).lanes();
         for (k, p) in picked.iter().enumerate() {

@@ -20,7 +20,7 @@ use super::sampler::Sampler;
 use crate::accel::counters::{self, Steps};
 use crate::accel::{Accel, Hit, Plain, Prims, Surface, Tally, Verbs};
 use crate::geometry::ray::Ray;
-use crate::scene::{Material, QuadLight, Scene};
+use crate::scene::{Material, MaterialId, QuadLight, Scene};
 
 /// Offset of secondary and shadow ray origins along the geometric normal, in scene units.
 pub const EPSILON: f32 = 1e-4;
@@ -511,18 +511,39 @@ impl<'a> Whitted<'a> {
         bounces: &Bounces,
         trace: &mut impl FnMut(usize, &Ray) -> Vec3,
     ) -> Vec3 {
-        let m = &self.scene.materials[surface.material as usize];
         let mut color = local;
         for (i, bounce) in [bounces.refracted, bounces.reflected].iter().enumerate() {
             if let Some((r, weight)) = bounce {
                 color += *weight * trace(i, r);
             }
         }
+        self.absorbed(color, surface)
+    }
+
+    /// `color` seen at `surface`, absorbed by Beer's law where the ray crossed a transmitter's
+    /// interior from its entry point to here.
+    #[inline]
+    pub(super) fn absorbed(&self, color: Vec3, surface: &Surface) -> Vec3 {
+        let m = &self.scene.materials[surface.material as usize];
         if surface.inside && m.transmission > 0.0 {
-            // The ray crossed the object's interior from its entry point to here.
-            color *= beer(m.diffuse, surface.t);
+            color * beer(m.diffuse, surface.t)
+        } else {
+            color
         }
-        color
+    }
+
+    /// Whether hits on `material` spawn at most their plain mirror ray, of weight Ks (opaque and
+    /// smooth: no Fresnel split, no random draw), the one ray [`split`](Self::split) then spawns;
+    /// the packet kernel sets those up in lanes.
+    #[inline]
+    pub(super) fn mirror_only(&self, material: MaterialId) -> bool {
+        let m = material as usize;
+        !(self.scene.materials[m].transmission > 0.0 || self.roughness[m] > 0.0)
+    }
+
+    /// Most bounces after the primary hit.
+    pub(super) fn max_depth(&self) -> u32 {
+        self.max_depth
     }
 
     /// Whether some material has a roughness: where it reflects, its mirror rays draw from the pixel

@@ -27,6 +27,22 @@ pub struct Vec3s {
     pub z: Vec<f32>,
 }
 
+/// A run of [`Vec3s`], its three components cut to one length ([`Vec3s::first`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Vec3View<'a> {
+    x: &'a [f32],
+    y: &'a [f32],
+    z: &'a [f32],
+}
+
+impl Vec3View<'_> {
+    /// The `i`-th vector.
+    #[inline(always)]
+    pub fn get(&self, i: usize) -> Vec3 {
+        Vec3::new(self.x[i], self.y[i], self.z[i])
+    }
+}
+
 impl Vec3s {
     /// Appends one vector.
     pub fn push(&mut self, v: Vec3) {
@@ -39,6 +55,17 @@ impl Vec3s {
     #[inline(always)]
     pub fn get(&self, i: usize) -> Vec3 {
         Vec3::new(self.x[i], self.y[i], self.z[i])
+    }
+
+    /// The first `n` vectors, as three slices of one length: indexing the view checks the index
+    /// once for all three components (and for any other slice cut to `n`).
+    #[inline(always)]
+    pub fn first(&self, n: usize) -> Vec3View<'_> {
+        Vec3View {
+            x: &self.x[..n],
+            y: &self.y[..n],
+            z: &self.z[..n],
+        }
     }
 
     /// Number of vectors.

@@ -4,21 +4,24 @@
 //! to the depth limit. Rays that leave neighbouring pixels' hits toward one light, or off one smooth
 //! surface, stay about as coherent as the camera rays.
 //!
-//! The camera rays and the local shading (shadow-ray set-up and Blinn-Phong, light sample by light
-//! sample) run in lanes (`shade.rs`, `render/lanes.rs`), with the single-ray path's operations in its order;
-//! each hit's bounces come from [`Whitted::bounces`] and its colour is finished by
-//! [`Whitted::add_bounces`], as on the single-ray path, and the accelerators' packet verbs answer each
-//! ray as their single-ray verbs do: the image is the single-ray path's, bit for bit.
+//! The camera rays, the hit points, the local shading (shadow-ray set-up and Blinn-Phong, light
+//! sample by light sample), opaque mirrors' reflected rays and the sum of what the bounces see run in
+//! lanes (`shade.rs`, `render/lanes.rs`), with the single-ray path's operations in its order; a
+//! transmitter's or a fuzzy mirror's rays (Fresnel's split, random draws, the split budget) come
+//! from [`Whitted::bounces`] lane by lane, and Beer's absorption from [`Whitted::absorbed`], as on
+//! the single-ray path. The accelerators' packet verbs answer each ray as their single-ray verbs do:
+//! the image is the single-ray path's, bit for bit.
 
 use glam::{Vec2, Vec3};
+use wide::f32x8;
 
 use super::shade::{HitLanes, light};
 use super::{BLOCK_H, BLOCK_W, PerRay, TilePixels, coherent};
+use crate::accel::Hit;
 use crate::accel::counters;
 use crate::accel::packet::{PACKET, bits};
-use crate::accel::{Hit, Surface};
 use crate::geometry::ray::Ray;
-use crate::render::lanes::Vec3x8;
+use crate::render::lanes::{Vec3x8, lane_mask};
 use crate::render::renderer::Renderer;
 use crate::render::sampler::PixelPattern;
 use crate::render::tiles::{TILE, Tile};
@@ -48,39 +51,64 @@ impl Whitted<'_> {
                 samples[k].rays.primary_hits += 1;
             }
         }
-        let surfaces: PerRay<Option<Surface>> =
-            std::array::from_fn(|k| (hit >> k & 1 == 1).then(|| self.prims.surface(&rays[k], &hits[k])));
-        let local = self.local_packet(rays, &surfaces, samples);
-
-        let bounces: PerRay<Bounces> = std::array::from_fn(|k| match &surfaces[k] {
-            Some(s) => self.bounces(&rays[k], s, depth, &mut samples[k]),
-            None => Bounces::default(),
-        });
-        for (sample, b) in samples.iter_mut().zip(&bounces) {
-            sample.rays.add_bounces(b);
+        let mut out = [Vec3::ZERO; PACKET];
+        for k in bits(active & !hit) {
+            // A miss: what the ray sees leaving the scene.
+            out[k] = self.shade(&rays[k], &hits[k], depth, &mut samples[k]);
         }
-        // What the refracted (0) and reflected (1) rays see, each kind as one packet (the lanes of
-        // `mask`; the others keep whatever ray they held, never traced).
-        let mut seen = [[Vec3::ZERO; PACKET]; 2];
-        let mut next = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
-        for (i, seen) in seen.iter_mut().enumerate() {
-            let mut mask = 0u8;
-            for (k, b) in bounces.iter().enumerate() {
-                if let Some((r, _)) = if i == 0 { &b.refracted } else { &b.reflected } {
-                    (next[k], mask) = (*r, mask | 1 << k);
+        let Some(h) = HitLanes::of_hits(&self.prims, rays, &hits, hit) else {
+            return out;
+        };
+        let mut color = self.local_packet(&h, samples);
+        if depth < self.max_depth() {
+            // Opaque, smooth materials' mirror rays are set up in lanes; the others' rays (Fresnel's
+            // split, a fuzzy mirror's draws, the split budget) lane by lane, as on the single-ray path.
+            let split = h.materials_where(|m| !self.mirror_only(m));
+            let mirror = hit & !split & h.glossy();
+            let mut bounces = [Bounces::default(); PACKET];
+            for k in bits(split) {
+                bounces[k] = self.bounces(&rays[k], &h.surface(k), depth, &mut samples[k]);
+                samples[k].rays.add_bounces(&bounces[k]);
+            }
+            for k in bits(mirror) {
+                samples[k].rays.reflected += 1;
+            }
+            let (origins, dirs, ks) = if mirror != 0 {
+                let (origin, dir, ks) = h.mirror();
+                (origin.lanes(), dir.lanes(), ks.to_array())
+            } else {
+                Default::default()
+            };
+            // What the refracted (0) and reflected (1) rays see, each kind as one packet (the lanes
+            // of `mask`; the others keep whatever ray they held, never traced), added in that order.
+            let mut next = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
+            for i in 0..2 {
+                let (mut mask, mut weight) = (0u8, [0.0; PACKET]);
+                if i == 1 {
+                    for k in bits(mirror) {
+                        (next[k], weight[k]) = (Ray::new(origins[k], dirs[k]), ks[k]);
+                    }
+                    mask = mirror;
+                }
+                for k in bits(split) {
+                    let b = &bounces[k];
+                    if let Some((r, w)) = if i == 0 { b.refracted } else { b.reflected } {
+                        (next[k], weight[k], mask) = (r, w, mask | 1 << k);
+                    }
+                }
+                if mask != 0 {
+                    let seen = self.trace_lanes(&next, mask, depth + 1, RayKind::secondary(i), samples);
+                    let added = color + Vec3x8::from_lanes(&seen) * f32x8::from(weight);
+                    color = Vec3x8::select(lane_mask(mask), added, color);
                 }
             }
-            if mask != 0 {
-                *seen = self.trace_lanes(&next, mask, depth + 1, RayKind::secondary(i), samples);
-            }
         }
-
-        let mut out = [Vec3::ZERO; PACKET];
-        for k in bits(active) {
-            out[k] = match &surfaces[k] {
-                None => self.shade(&rays[k], &hits[k], depth, &mut samples[k]),
-                Some(s) => self.add_bounces(local[k], s, &bounces[k], &mut |i, _| seen[i][k]),
-            };
+        let color = color.lanes();
+        for k in bits(hit) {
+            out[k] = color[k];
+        }
+        for k in bits(h.inside()) {
+            out[k] = self.absorbed(out[k], &h.surface(k));
         }
         out
     }
@@ -106,20 +134,12 @@ impl Whitted<'_> {
         out
     }
 
-    /// The local colour of the packet's hits (at `surfaces`, seen along `rays`): light sample by
-    /// light sample, the eight shadow rays set up in lanes and traced as one packet (lane `k` aims at
-    /// its own pixel sample's light), and the Blinn-Phong sum in lanes ([`HitLanes`]).
+    /// The local colour of the packet's hits `hits`: light sample by light sample, the
+    /// eight shadow rays set up in lanes and traced as one packet (lane `k` aims at its own pixel
+    /// sample's light), and the Blinn-Phong sum in lanes.
     // Not inlined: a phase of `profiles/frame.sh`, called once a packet.
     #[inline(never)]
-    fn local_packet(
-        &self,
-        rays: &PerRay<Ray>,
-        surfaces: &PerRay<Option<Surface>>,
-        samples: &mut PerRay<PixelSample>,
-    ) -> PerRay<Vec3> {
-        let Some(hits) = HitLanes::new(self.prims.scene, |k| rays[k].dir, |k| surfaces[k].as_ref()) else {
-            return [Vec3::ZERO; PACKET];
-        };
+    fn local_packet(&self, hits: &HitLanes, samples: &mut PerRay<PixelSample>) -> Vec3x8 {
         let lights = samples.each_ref().map(|s| s.lights);
         let mut color = Vec3x8::ZERO;
         for i in 0..lights[0].len() {
@@ -140,7 +160,7 @@ impl Whitted<'_> {
             };
             hits.add_light(&mut color, &toward, lit & !blocked, light);
         }
-        color.lanes()
+        color
     }
 }
 

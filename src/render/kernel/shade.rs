@@ -11,23 +11,27 @@ use glam::Vec3;
 use wide::f32x8;
 
 use super::PerRay;
-use crate::accel::Surface;
 use crate::accel::packet::{PACKET, bits};
+use crate::accel::{Hit, PrimKind, Prims, Surface};
 use crate::geometry::ray::Ray;
 use crate::render::lanes::{Vec3x8, lane_mask, positive};
 use crate::render::light::Lights;
 use crate::render::whitted::EPSILON;
-use crate::scene::{Material, MaterialId, Scene};
+use crate::scene::{Material, MaterialId, NO_NORMALS, Scene};
 
-/// Up to eight hits in lanes: where they lie, their normals, the way back to the eye and their
+/// Up to eight hits in lanes: where they lie, their normals, the rays' directions and their
 /// materials.
 pub(super) struct HitLanes {
+    t: f32x8,
     p: Vec3x8,
     ng: Vec3x8,
     ns: Vec3x8,
-    /// Toward the eye: the rays' directions reversed.
-    v: Vec3x8,
+    dir: Vec3x8,
+    /// Each lane's material (a dead lane holds a live lane's).
+    ids: PerRay<MaterialId>,
     m: Materials,
+    /// The lanes whose ray hit the back of its surface ([`Surface::inside`]).
+    inside: u8,
     /// The lanes that hold a hit.
     live: u8,
 }
@@ -45,33 +49,157 @@ pub(super) struct ShadowLanes {
 }
 
 impl HitLanes {
-    /// The hits `surface(k)` (none: a dead lane) of rays with directions `dir(k)`; `None` if no
-    /// lane holds a hit. Inlined into its callers, so that the eight hits go straight from where
-    /// they lie into the lanes.
+    /// The surfaces at the closest hits `hits` of `rays` in the lanes of `live`, computed in lanes
+    /// ([`Prims::surface`]'s operations in its order): a triangle's normals from its edges and vertex
+    /// normals gathered lane by lane, other kinds' normals lane by lane. `None` if no lane is live.
+    // Not inlined: a phase of `profiles/frame.sh`, called once a packet.
+    #[inline(never)]
+    pub fn of_hits(prims: &Prims, rays: &PerRay<Ray>, hits: &PerRay<Hit>, live: u8) -> Option<Self> {
+        let first = bits(live).next()?;
+        let tris = &prims.scene.triangles;
+        // Every array cut to one length: one bounds check a lane.
+        let n = tris.material.len();
+        let (edge1, edge2) = (tris.e1.first(n), tris.e2.first(n));
+        let (material, normals) = (&tris.material[..n], &tris.normals[..n]);
+        // Gathered straight into the lanes: each triangle's edges and vertex normals, and the other
+        // kinds' normals.
+        let (mut e1, mut e2) = (Vec3x8::ZERO, Vec3x8::ZERO);
+        let mut corners = [Vec3x8::ZERO; 3];
+        let (mut u, mut v) = (f32x8::ZERO, f32x8::ZERO);
+        let (mut other_ng, mut other_ns) = (Vec3x8::ZERO, Vec3x8::ZERO);
+        let mut ids = [MaterialId::MAX; PACKET];
+        // Lanes on triangles with vertex normals, and lanes on other kinds of primitive.
+        let (mut smooth, mut other) = (0u8, 0u8);
+        for k in bits(live) {
+            let hit = &hits[k];
+            if let PrimKind::Triangle(i) = prims.kind(hit.prim) {
+                e1.set(k, edge1.get(i));
+                e2.set(k, edge2.get(i));
+                ids[k] = material[i];
+                if normals[i] != NO_NORMALS {
+                    let n = &tris.vertex_normals[normals[i] as usize];
+                    for (corner, n) in corners.iter_mut().zip(n) {
+                        corner.set(k, *n);
+                    }
+                    (u.as_mut_array()[k], v.as_mut_array()[k]) = (hit.u, hit.v);
+                    smooth |= 1 << k;
+                }
+            } else {
+                let (ng, ns, id) = prims.normals(rays[k].at(hit.t), hit);
+                other_ng.set(k, ng);
+                other_ns.set(k, ns);
+                ids[k] = id;
+                other |= 1 << k;
+            }
+        }
+        let dir = Vec3x8::from_fn(|k| rays[k].dir);
+        let t = f32x8::from(std::array::from_fn::<_, PACKET, _>(|k| hits[k].t));
+        let p = Vec3x8::from_fn(|k| rays[k].origin) + dir * t;
+        let mut ng = e1.cross(e2).normalize_or_zero();
+        let mut ns = ng;
+        if smooth != 0 {
+            // Each vertex normal turned to the geometric normal's side, then interpolated.
+            let [n0, n1, n2] = corners.map(|n| Vec3x8::select(n.dot(ng).simd_lt(f32x8::ZERO), -n, n));
+            let smoothed = (n0 * (f32x8::ONE - u - v) + n1 * u + n2 * v).normalize_or_zero();
+            ns = Vec3x8::select(lane_mask(smooth & smoothed.finite()), smoothed, ng);
+        }
+        if other != 0 {
+            let other = lane_mask(other);
+            ng = Vec3x8::select(other, other_ng, ng);
+            ns = Vec3x8::select(other, other_ns, ns);
+        }
+        // Two-sided: both normals turned toward the incoming ray.
+        let back = dir.dot(ng).simd_gt(f32x8::ZERO);
+        let sign = back.select(f32x8::splat(-1.0), f32x8::ONE);
+        Some(HitLanes {
+            t,
+            p,
+            ng: ng * sign,
+            ns: ns * sign,
+            dir,
+            m: Materials::gather(prims.scene, &ids, ids[first]),
+            ids,
+            inside: live & back.to_bitmask() as u8,
+            live,
+        })
+    }
+
+    /// The hits `surface(k)` (none: a dead lane) of rays with directions `dir(k)`, as they lie;
+    /// `None` if no lane holds a hit. Inlined into its callers, so that the eight hits go straight
+    /// from where they lie into the lanes.
     #[inline(always)]
-    pub fn new<'s>(
+    pub fn of_surfaces<'s>(
         scene: &Scene,
         dir: impl Fn(usize) -> Vec3,
         surface: impl Fn(usize) -> Option<&'s Surface>,
     ) -> Option<Self> {
         let (mut p, mut ng, mut ns) = ([Vec3::ZERO; PACKET], [Vec3::ZERO; PACKET], [Vec3::ZERO; PACKET]);
+        let mut t = [0.0; PACKET];
         let mut ids = [MaterialId::MAX; PACKET];
-        let mut live = 0u8;
+        let (mut live, mut inside) = (0u8, 0u8);
         for k in 0..PACKET {
             if let Some(s) = surface(k) {
-                (p[k], ng[k], ns[k], ids[k]) = (s.point, s.geometric, s.shading, s.material);
+                (t[k], p[k], ng[k], ns[k], ids[k]) = (s.t, s.point, s.geometric, s.shading, s.material);
                 live |= 1 << k;
+                inside |= u8::from(s.inside) << k;
             }
         }
         let first = bits(live).next()?;
         Some(HitLanes {
+            t: f32x8::from(t),
             p: Vec3x8::from_lanes(&p),
             ng: Vec3x8::from_lanes(&ng),
             ns: Vec3x8::from_lanes(&ns),
-            v: -Vec3x8::from_lanes(&std::array::from_fn(dir)),
+            dir: Vec3x8::from_lanes(&std::array::from_fn(dir)),
             m: Materials::gather(scene, &ids, ids[first]),
+            ids,
+            inside,
             live,
         })
+    }
+
+    /// The lanes whose ray hit the back of its surface.
+    #[inline]
+    pub fn inside(&self) -> u8 {
+        self.inside
+    }
+
+    /// The lanes whose material has a highlight and a mirror (Ks > 0).
+    #[inline]
+    pub fn glossy(&self) -> u8 {
+        self.m.glossy
+    }
+
+    /// The live lanes whose material passes `test`: one test where the lanes share a material.
+    #[inline]
+    pub fn materials_where(&self, test: impl Fn(MaterialId) -> bool) -> u8 {
+        match self.m.shared {
+            Some(id) => self.live & 0u8.wrapping_sub(u8::from(test(id))),
+            None => bits(self.live).fold(0, |m, k| m | u8::from(test(self.ids[k])) << k),
+        }
+    }
+
+    /// Lane `k`'s surface, as [`Prims::surface`] gives it.
+    pub fn surface(&self, k: usize) -> Surface {
+        Surface {
+            t: self.t.to_array()[k],
+            point: self.p.lane(k),
+            geometric: self.ng.lane(k),
+            shading: self.ns.lane(k),
+            material: self.ids[k],
+            inside: self.inside >> k & 1 == 1,
+        }
+    }
+
+    /// The mirror rays of the hits, from just off each surface on the rays' side, and their weights
+    /// Ks: [`Whitted::bounces`]' reflected ray for an opaque, smooth material, in lanes.
+    ///
+    /// [`Whitted::bounces`]: crate::render::whitted::Whitted::bounces
+    #[inline]
+    pub fn mirror(&self) -> (Vec3x8, Vec3x8, f32x8) {
+        let d = self.dir;
+        let reflected = (d - self.ns * (f32x8::splat(2.0) * d.dot(self.ns))).normalize();
+        (self.p + self.ng * f32x8::splat(EPSILON), reflected, self.m.ks)
     }
 
     /// Light sample positions `at` seen from the hits: the directions toward them and which lanes
@@ -110,7 +238,7 @@ impl HitLanes {
         let mut c = m.diffuse * (m.kd * toward.n_dot_l);
         let glossy = seen & m.glossy;
         if glossy != 0 {
-            let n_dot_h = (toward.l + self.v).normalize().dot(self.ns).to_array();
+            let n_dot_h = (toward.l - self.dir).normalize().dot(self.ns).to_array();
             let mut power = [0.0; PACKET];
             for k in bits(glossy) {
                 power[k] = n_dot_h[k].max(0.0).powf(m.shininess[k]);
@@ -145,6 +273,8 @@ struct Materials {
     specular: Vec3x8,
     /// The lanes whose material has a highlight (Ks > 0).
     glossy: u8,
+    /// The material of every lane, where they share one.
+    shared: Option<MaterialId>,
 }
 
 impl Materials {
@@ -162,6 +292,7 @@ impl Materials {
                 diffuse: Vec3x8::splat(m.diffuse),
                 specular: Vec3x8::splat(m.specular),
                 glossy: if glossy(m) { !0 } else { 0 },
+                shared: Some(one),
             };
         }
         let m = ids.map(|i| &scene.materials[i as usize]);
@@ -175,6 +306,7 @@ impl Materials {
                 .iter()
                 .enumerate()
                 .fold(0, |g, (k, m)| g | u8::from(glossy(m)) << k),
+            shared: None,
         }
     }
 }

@@ -409,7 +409,7 @@ impl Renderer<'_> {
     /// The hits of nodes `eight` (up to eight, each with a surface) in lanes.
     fn hit_lanes(&self, eight: &[u32], nodes: &[RayNode]) -> HitLanes {
         let node = |k: usize| eight.get(k).map(|&n| &nodes[n as usize]);
-        HitLanes::new(
+        HitLanes::of_surfaces(
             self.whitted.prims.scene,
             |k| node(k).map_or(Vec3::Z, |n| n.ray.dir),
             |k| node(k).and_then(|n| n.surface.as_ref()),
