@@ -2,6 +2,9 @@
 //! approximation and Beer's absorption. Directions are unit vectors; `n` faces the incoming ray.
 
 use glam::Vec3;
+use wide::f32x8;
+
+use super::lanes::Vec3x8;
 
 /// Mirror direction of `d` about `n`: `d - 2(d·n)n`.
 #[inline]
@@ -51,9 +54,105 @@ pub fn beer(color: Vec3, distance: f32) -> Vec3 {
     (-absorption * distance).map(f32::exp)
 }
 
+/// [`reflect`] in each lane.
+#[inline]
+pub(crate) fn reflect8(d: Vec3x8, n: Vec3x8) -> Vec3x8 {
+    d - n * (f32x8::splat(2.0) * d.dot(n))
+}
+
+/// [`refract`] in each lane: the refracted directions, and the lanes under total internal
+/// reflection as a lane mask (their directions are not numbers).
+#[inline]
+pub(crate) fn refract8(d: Vec3x8, n: Vec3x8, eta: f32x8) -> (Vec3x8, f32x8) {
+    let cos_i = -d.dot(n);
+    let sin2_t = eta * eta * (f32x8::ONE - cos_i * cos_i).max(f32x8::ZERO);
+    let cos_t = (f32x8::ONE - sin2_t).sqrt();
+    (d * eta + n * (eta * cos_i - cos_t), sin2_t.simd_ge(f32x8::ONE))
+}
+
+/// [`schlick`] in each lane (its powers as the same products: x² = x·x, x⁵ = x·(x²)²).
+#[inline]
+pub(crate) fn schlick8(cos_i: f32x8, eta_i: f32x8, eta_t: f32x8) -> f32x8 {
+    let q = (eta_i - eta_t) / (eta_i + eta_t);
+    let r0 = q * q;
+    let e = eta_i / eta_t;
+    let sin2_t = e * e * (f32x8::ONE - cos_i * cos_i).max(f32x8::ZERO);
+    let denser = eta_i.simd_gt(eta_t);
+    let c = f32x8::ONE - clamp01(denser.select((f32x8::ONE - sin2_t).sqrt(), cos_i));
+    let c2 = c * c;
+    let k = r0 + (f32x8::ONE - r0) * (c * (c2 * c2));
+    (denser & sin2_t.simd_ge(f32x8::ONE)).select(f32x8::ONE, k)
+}
+
+/// `x.clamp(0.0, 1.0)` in each lane (a NaN stays NaN).
+#[inline]
+pub(crate) fn clamp01(x: f32x8) -> f32x8 {
+    let x = x.simd_lt(f32x8::ZERO).select(f32x8::ZERO, x);
+    x.simd_gt(f32x8::ONE).select(f32x8::ONE, x)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::sampler::Sampler;
+
+    /// The lanes forms give the scalar forms' bits, lane by lane, on random unit directions and
+    /// normals at both sides of the critical angle, entering and leaving.
+    #[test]
+    fn lanes_are_the_scalar_bits() {
+        let mut rng = Sampler::new(3, 1, 0, 1);
+        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+        let (mut tir, mut through) = (0, 0);
+        for round in 0..2_000 {
+            let d: [Vec3; 8] = std::array::from_fn(|_| rng.in_unit_ball().normalize_or(Vec3::X));
+            let n: [Vec3; 8] = std::array::from_fn(|k| {
+                rng.in_unit_ball().normalize_or(Vec3::Y) * -d[k].dot(Vec3::ONE).signum()
+            });
+            let eta_i: [f32; 8] = std::array::from_fn(|k| {
+                if (round + k) % 2 == 0 {
+                    1.0
+                } else {
+                    1.0 + rng.uniform()
+                }
+            });
+            let eta_t: [f32; 8] = std::array::from_fn(|k| {
+                if (round + k) % 2 == 0 {
+                    1.0 + rng.uniform()
+                } else {
+                    1.0
+                }
+            });
+            let cos_i: [f32; 8] = std::array::from_fn(|k| (-d[k].dot(n[k])).clamp(0.0, 1.0));
+            let (dl, nl) = (Vec3x8::from_lanes(&d), Vec3x8::from_lanes(&n));
+            let eta: [f32; 8] = std::array::from_fn(|k| eta_i[k] / eta_t[k]);
+            let reflected = reflect8(dl, nl);
+            let (refracted, total) = refract8(dl, nl, f32x8::from(eta));
+            let total = total.to_bitmask();
+            let kr = schlick8(f32x8::from(cos_i), f32x8::from(eta_i), f32x8::from(eta_t)).to_array();
+            let clamped = clamp01(-dl.dot(nl)).to_array();
+            for k in 0..8 {
+                assert_eq!(bits(reflected.lane(k)), bits(reflect(d[k], n[k])));
+                match refract(d[k], n[k], eta[k]) {
+                    Some(t) => {
+                        assert_eq!(total >> k & 1, 0);
+                        assert_eq!(bits(refracted.lane(k)), bits(t));
+                        through += 1;
+                    }
+                    None => {
+                        assert_eq!(total >> k & 1, 1);
+                        tir += 1;
+                    }
+                }
+                assert_eq!(kr[k].to_bits(), schlick(cos_i[k], eta_i[k], eta_t[k]).to_bits());
+                assert_eq!(clamped[k].to_bits(), cos_i[k].to_bits());
+            }
+        }
+        assert!(tir > 1_000 && through > 1_000, "{tir} {through}");
+        let odd = f32x8::from([-1.0, -0.0, 0.0, 0.5, 1.0, 2.0, f32::NAN, f32::INFINITY]);
+        for (got, x) in clamp01(odd).to_array().iter().zip(odd.to_array()) {
+            assert_eq!(got.to_bits(), x.clamp(0.0, 1.0).to_bits());
+        }
+    }
 
     #[test]
     fn reflection_is_a_mirror() {

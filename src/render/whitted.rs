@@ -188,6 +188,13 @@ pub struct SampleRays {
 }
 
 impl SampleRays {
+    /// Whether these rays have spent the split budget (`SPLIT_BUDGET`): a hit that would spawn
+    /// both a refracted and a reflected ray then spawns only the heavier.
+    #[inline]
+    pub fn budget_spent(&self) -> bool {
+        self.reflected + self.refracted >= SPLIT_BUDGET
+    }
+
     /// Counts the secondary rays of `bounces`.
     pub fn add_bounces(&mut self, bounces: &Bounces) {
         self.refracted += bounces.refracted.is_some() as u64;
@@ -420,9 +427,8 @@ impl<'a> Whitted<'a> {
     /// direction is perturbed within a ball of its roughness, drawn from the sample's generator.
     pub fn bounces(&self, ray: &Ray, surface: &Surface, depth: u32, sample: &mut PixelSample) -> Bounces {
         let mut out = self.split(ray, surface, depth, &mut sample.rng);
-        let spent = sample.rays.reflected + sample.rays.refracted;
         if let (Some((_, t)), Some((_, r))) = (out.refracted, out.reflected)
-            && spent >= SPLIT_BUDGET
+            && sample.rays.budget_spent()
         {
             // On a tie the mirror ray goes on: it is the one a total internal reflection keeps.
             if t > r {
@@ -532,18 +538,20 @@ impl<'a> Whitted<'a> {
         }
     }
 
-    /// Whether hits on `material` spawn at most their plain mirror ray, of weight Ks (opaque and
-    /// smooth: no Fresnel split, no random draw), the one ray [`split`](Self::split) then spawns;
-    /// the packet kernel sets those up in lanes.
+    /// Whether `material`'s mirror rays are fuzzy ([`fuzz`]: drawn from the sample's generator).
     #[inline]
-    pub(super) fn mirror_only(&self, material: MaterialId) -> bool {
-        let m = material as usize;
-        !(self.scene.materials[m].transmission > 0.0 || self.roughness[m] > 0.0)
+    pub(super) fn rough(&self, material: MaterialId) -> bool {
+        self.roughness[material as usize] > 0.0
     }
 
     /// Most bounces after the primary hit.
     pub(super) fn max_depth(&self) -> u32 {
         self.max_depth
+    }
+
+    /// Whether the SPD's rules apply ([`super::spd`]).
+    pub(super) fn spd(&self) -> bool {
+        self.spd
     }
 
     /// Whether some material has a roughness: where it reflects, its mirror rays draw from the pixel

@@ -13,7 +13,6 @@
 //! the image is the single-ray path's, bit for bit.
 
 use glam::{Vec2, Vec3};
-use wide::f32x8;
 
 use super::shade::{HitLanes, light};
 use super::{BLOCK_H, BLOCK_W, PerRay, TilePixels, coherent};
@@ -39,7 +38,7 @@ impl Whitted<'_> {
         depth: u32,
         kind: RayKind,
         samples: &mut PerRay<PixelSample>,
-    ) -> PerRay<Vec3> {
+    ) -> Vec3x8 {
         let mut hits = [Hit::miss(f32::INFINITY); PACKET];
         let hit = if self.counts() {
             closest_counted(self, rays, active, kind, samples, &mut hits)
@@ -51,66 +50,60 @@ impl Whitted<'_> {
                 samples[k].rays.primary_hits += 1;
             }
         }
-        let mut out = [Vec3::ZERO; PACKET];
+        let mut out = Vec3x8::ZERO;
         for k in bits(active & !hit) {
             // A miss: what the ray sees leaving the scene.
-            out[k] = self.shade(&rays[k], &hits[k], depth, &mut samples[k]);
+            out.set(k, self.shade(&rays[k], &hits[k], depth, &mut samples[k]));
         }
         let Some(h) = HitLanes::of_hits(&self.prims, rays, &hits, hit) else {
             return out;
         };
         let mut color = self.local_packet(&h, samples);
         if depth < self.max_depth() {
-            // Opaque, smooth materials' mirror rays are set up in lanes; the others' rays (Fresnel's
-            // split, a fuzzy mirror's draws, the split budget) lane by lane, as on the single-ray path.
-            let split = h.materials_where(|m| !self.mirror_only(m));
-            let mirror = hit & !split & h.glossy();
-            let mut bounces = [Bounces::default(); PACKET];
-            for k in bits(split) {
-                bounces[k] = self.bounces(&rays[k], &h.surface(k), depth, &mut samples[k]);
-                samples[k].rays.add_bounces(&bounces[k]);
+            // Smooth materials' rays are set up in lanes; a fuzzy mirror's (its draws) and those of
+            // a transmitter hit by a sample that spent its split budget lane by lane, as on the
+            // single-ray path.
+            let spent =
+                bits(hit & h.transmits()).fold(0, |m, k| m | u8::from(samples[k].rays.budget_spent()) << k);
+            let alone = h.materials_where(|m| self.rough(m)) | spent;
+            let lanes = h.bounces(hit & !alone, self.spd());
+            let bounces = (alone != 0).then(|| {
+                std::array::from_fn::<_, PACKET, _>(|k| match alone >> k & 1 {
+                    0 => Bounces::default(),
+                    _ => self.bounces(&rays[k], &h.surface(k), depth, &mut samples[k]),
+                })
+            });
+            for k in bits(hit) {
+                let r = &mut samples[k].rays;
+                r.refracted += u64::from(lanes[0].lanes >> k & 1);
+                r.reflected += u64::from(lanes[1].lanes >> k & 1);
             }
-            for k in bits(mirror) {
-                samples[k].rays.reflected += 1;
+            for (k, b) in bounces.iter().flatten().enumerate() {
+                samples[k].rays.add_bounces(b);
             }
-            let (origins, dirs, ks) = if mirror != 0 {
-                let (origin, dir, ks) = h.mirror();
-                (origin.lanes(), dir.lanes(), ks.to_array())
-            } else {
-                Default::default()
-            };
             // What the refracted (0) and reflected (1) rays see, each kind as one packet (the lanes
             // of `mask`; the others keep whatever ray they held, never traced), added in that order.
             let mut next = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
-            for i in 0..2 {
-                let (mut mask, mut weight) = (0u8, [0.0; PACKET]);
-                if i == 1 {
-                    for k in bits(mirror) {
-                        (next[k], weight[k]) = (Ray::new(origins[k], dirs[k]), ks[k]);
-                    }
-                    mask = mirror;
+            for (i, spawned) in lanes.iter().enumerate() {
+                let (mut mask, mut weight) = (spawned.lanes, spawned.weight);
+                for k in bits(mask) {
+                    next[k] = Ray::new(spawned.origin.lane(k), spawned.dir.lane(k));
                 }
-                for k in bits(split) {
-                    let b = &bounces[k];
+                for (k, b) in bounces.iter().flatten().enumerate() {
                     if let Some((r, w)) = if i == 0 { b.refracted } else { b.reflected } {
-                        (next[k], weight[k], mask) = (r, w, mask | 1 << k);
+                        (next[k], weight.as_mut_array()[k], mask) = (r, w, mask | 1 << k);
                     }
                 }
                 if mask != 0 {
                     let seen = self.trace_lanes(&next, mask, depth + 1, RayKind::secondary(i), samples);
-                    let added = color + Vec3x8::from_lanes(&seen) * f32x8::from(weight);
-                    color = Vec3x8::select(lane_mask(mask), added, color);
+                    color = Vec3x8::select(lane_mask(mask), color + seen * weight, color);
                 }
             }
         }
-        let color = color.lanes();
-        for k in bits(hit) {
-            out[k] = color[k];
-        }
         for k in bits(h.inside()) {
-            out[k] = self.absorbed(out[k], &h.surface(k));
+            color.set(k, self.absorbed(color.lane(k), &h.surface(k)));
         }
-        out
+        Vec3x8::select(lane_mask(hit), color, out)
     }
 
     /// [`shade_packet`](Self::shade_packet), or ray by ray when too few lanes are live to share nodes
@@ -123,13 +116,13 @@ impl Whitted<'_> {
         depth: u32,
         kind: RayKind,
         samples: &mut PerRay<PixelSample>,
-    ) -> PerRay<Vec3> {
+    ) -> Vec3x8 {
         if coherent(bits(mask).map(|k| &rays[k])) {
             return self.shade_packet(rays, mask, depth, kind, samples);
         }
-        let mut out = [Vec3::ZERO; PACKET];
+        let mut out = Vec3x8::ZERO;
         for k in bits(mask) {
-            out[k] = self.trace(&rays[k], depth, kind, &mut samples[k]);
+            out.set(k, self.trace(&rays[k], depth, kind, &mut samples[k]));
         }
         out
     }
@@ -269,14 +262,14 @@ impl Renderer<'_> {
                         active |= 1 << k;
                     }
                 }
-                let mut sums = [Vec3::ZERO; PACKET];
+                let mut sums = Vec3x8::ZERO;
                 for s in 0..self.samples() {
                     self.camera_packet(pixel, active, pass, s, &patterns, (&mut rays, &mut samples));
                     let colors = self
                         .whitted
                         .shade_packet(&rays, active, 0, RayKind::Camera, &mut samples);
+                    sums = sums + colors;
                     for k in bits(active) {
-                        sums[k] += colors[k];
                         samples[k].rays.primary += 1;
                         *rays_traced += samples[k].rays;
                         if let Some(p) = pixels.as_deref_mut() {
@@ -291,7 +284,8 @@ impl Renderer<'_> {
                 }
                 for k in bits(active) {
                     let (x, y) = pixel(k);
-                    buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] = sums[k] / self.samples() as f32;
+                    buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] =
+                        sums.lane(k) / self.samples() as f32;
                 }
             }
         }

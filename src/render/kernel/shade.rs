@@ -16,6 +16,7 @@ use crate::accel::{Hit, PrimKind, Prims, Surface};
 use crate::geometry::ray::Ray;
 use crate::render::lanes::{Vec3x8, lane_mask, positive};
 use crate::render::light::Lights;
+use crate::render::optics::{clamp01, reflect8, refract8, schlick8};
 use crate::render::whitted::EPSILON;
 use crate::scene::{Material, MaterialId, NO_NORMALS, Scene};
 
@@ -46,6 +47,24 @@ pub(super) struct ShadowLanes {
     /// The live lanes whose light lies in front of the shading normal: those whose shadow rays are
     /// traced (the others add nothing, as `ShadowRay::new` returns none for them).
     pub lit: u8,
+}
+
+/// One kind of secondary ray spawned by the hits of a [`HitLanes`] ([`HitLanes::bounces`]).
+pub(super) struct Spawned {
+    /// The lanes that spawn one.
+    pub lanes: u8,
+    pub origin: Vec3x8,
+    pub dir: Vec3x8,
+    pub weight: f32x8,
+}
+
+impl Spawned {
+    const NONE: Spawned = Spawned {
+        lanes: 0,
+        origin: Vec3x8::ZERO,
+        dir: Vec3x8::ZERO,
+        weight: f32x8::ZERO,
+    };
 }
 
 impl HitLanes {
@@ -164,10 +183,10 @@ impl HitLanes {
         self.inside
     }
 
-    /// The lanes whose material has a highlight and a mirror (Ks > 0).
+    /// The lanes whose material transmits.
     #[inline]
-    pub fn glossy(&self) -> u8 {
-        self.m.glossy
+    pub fn transmits(&self) -> u8 {
+        self.m.transmits
     }
 
     /// The live lanes whose material passes `test`: one test where the lanes share a material.
@@ -191,15 +210,47 @@ impl HitLanes {
         }
     }
 
-    /// The mirror rays of the hits, from just off each surface on the rays' side, and their weights
-    /// Ks: [`Whitted::bounces`]' reflected ray for an opaque, smooth material, in lanes.
+    /// The refracted (0) and reflected (1) rays of the hits in `lanes` on smooth materials, from
+    /// just off each surface on the side each leaves to, with their weights: [`Whitted::bounces`]'
+    /// rays in lanes (Snell's refraction and Schlick's Fresnel split for transmitters, Ks for the
+    /// mirror), under the SPD's rules with `spd`.
     ///
     /// [`Whitted::bounces`]: crate::render::whitted::Whitted::bounces
     #[inline]
-    pub fn mirror(&self) -> (Vec3x8, Vec3x8, f32x8) {
-        let d = self.dir;
-        let reflected = (d - self.ns * (f32x8::splat(2.0) * d.dot(self.ns))).normalize();
-        (self.p + self.ng * f32x8::splat(EPSILON), reflected, self.m.ks)
+    pub fn bounces(&self, lanes: u8, spd: bool) -> [Spawned; 2] {
+        let (m, d, eps) = (&self.m, self.dir, f32x8::splat(EPSILON));
+        let (mut kr, mut total) = (f32x8::ONE, f32x8::ZERO);
+        let mut refracted = Spawned::NONE;
+        let glass = lanes & m.transmits;
+        if glass != 0 {
+            let inside = lane_mask(self.inside);
+            let (eta_i, eta_t) = (inside.select(m.ior, f32x8::ONE), inside.select(f32x8::ONE, m.ior));
+            let fresnel = schlick8(clamp01(-d.dot(self.ns)), eta_i, eta_t);
+            let (t, all_reflected) = refract8(d, self.ns, eta_i / eta_t);
+            total = lane_mask(glass) & all_reflected;
+            kr = lane_mask(glass).select(total.select(f32x8::ONE, fresnel), f32x8::ONE);
+            let weight = m.transmission * (f32x8::ONE - kr);
+            let kept = if spd { !0 } else { positive(weight) };
+            refracted = Spawned {
+                lanes: glass & !(total.to_bitmask() as u8) & kept,
+                origin: self.p - self.ng * eps,
+                dir: t.normalize(),
+                weight,
+            };
+        }
+        let weight = if spd {
+            total.select(m.ks + m.transmission, m.ks * kr)
+        } else {
+            m.ks * kr
+        };
+        let kept = positive(weight) | if spd { m.transmits } else { 0 };
+        let reflected = Spawned {
+            lanes: lanes & kept,
+            origin: self.p + self.ng * eps,
+            dir: reflect8(d, self.ns).normalize(),
+            weight,
+        };
+        [refracted, reflected]
     }
 
     /// Light sample positions `at` seen from the hits: the directions toward them and which lanes
@@ -271,8 +322,12 @@ struct Materials {
     shininess: [f32; PACKET],
     diffuse: Vec3x8,
     specular: Vec3x8,
-    /// The lanes whose material has a highlight (Ks > 0).
+    transmission: f32x8,
+    ior: f32x8,
+    /// The lanes whose material has a highlight and a mirror (Ks > 0).
     glossy: u8,
+    /// The lanes whose material transmits (refracts).
+    transmits: u8,
     /// The material of every lane, where they share one.
     shared: Option<MaterialId>,
 }
@@ -282,7 +337,7 @@ impl Materials {
     #[inline(always)]
     fn gather(scene: &Scene, ids: &PerRay<MaterialId>, one: MaterialId) -> Self {
         let ids = ids.map(|i| if i == MaterialId::MAX { one } else { i });
-        let glossy = |m: &Material| m.ks > 0.0;
+        let all = |yes: bool| if yes { !0 } else { 0 };
         if ids.iter().all(|&i| i == one) {
             let m = &scene.materials[one as usize];
             return Materials {
@@ -291,21 +346,29 @@ impl Materials {
                 shininess: [m.shininess; PACKET],
                 diffuse: Vec3x8::splat(m.diffuse),
                 specular: Vec3x8::splat(m.specular),
-                glossy: if glossy(m) { !0 } else { 0 },
+                transmission: f32x8::splat(m.transmission),
+                ior: f32x8::splat(m.ior),
+                glossy: all(m.ks > 0.0),
+                transmits: all(m.transmission > 0.0),
                 shared: Some(one),
             };
         }
         let m = ids.map(|i| &scene.materials[i as usize]);
+        let lanes = |test: fn(&Material) -> bool| {
+            m.iter()
+                .enumerate()
+                .fold(0, |g, (k, m)| g | u8::from(test(m)) << k)
+        };
         Materials {
             kd: f32x8::from(m.map(|m| m.kd)),
             ks: f32x8::from(m.map(|m| m.ks)),
             shininess: m.map(|m| m.shininess),
             diffuse: Vec3x8::from_lanes(&m.map(|m| m.diffuse)),
             specular: Vec3x8::from_lanes(&m.map(|m| m.specular)),
-            glossy: m
-                .iter()
-                .enumerate()
-                .fold(0, |g, (k, m)| g | u8::from(glossy(m)) << k),
+            transmission: f32x8::from(m.map(|m| m.transmission)),
+            ior: f32x8::from(m.map(|m| m.ior)),
+            glossy: lanes(|m| m.ks > 0.0),
+            transmits: lanes(|m| m.transmission > 0.0),
             shared: None,
         }
     }
