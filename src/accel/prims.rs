@@ -261,7 +261,7 @@ impl<'a> Prims<'a> {
 
     /// The geometric and shading normals (not yet turned toward the ray) and the material of `hit`,
     /// at its `point`.
-    #[inline]
+    #[inline(always)]
     pub fn normals(&self, point: Vec3, hit: &Hit) -> (Vec3, Vec3, MaterialId) {
         let s = self.scene;
         match self.kind(hit.prim) {

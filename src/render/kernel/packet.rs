@@ -66,7 +66,7 @@ impl Whitted<'_> {
             let spent =
                 bits(hit & h.transmits()).fold(0, |m, k| m | u8::from(samples[k].rays.budget_spent()) << k);
             let alone = h.materials_where(|m| self.rough(m)) | spent;
-            let lanes = h.bounces(hit & !alone, self.spd());
+            let lanes = h.bounces(self.prims.scene, hit & !alone, self.spd());
             let bounces = (alone != 0).then(|| {
                 std::array::from_fn::<_, PACKET, _>(|k| match alone >> k & 1 {
                     0 => Bounces::default(),

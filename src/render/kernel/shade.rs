@@ -130,13 +130,15 @@ impl HitLanes {
         // Two-sided: both normals turned toward the incoming ray.
         let back = dir.dot(ng).simd_gt(f32x8::ZERO);
         let sign = back.select(f32x8::splat(-1.0), f32x8::ONE);
+        // Dead lanes take a live lane's material: most packets then share one.
+        let ids = ids.map(|id| if id == MaterialId::MAX { ids[first] } else { id });
         Some(HitLanes {
             t,
             p,
             ng: ng * sign,
             ns: ns * sign,
             dir,
-            m: Materials::gather(prims.scene, &ids, ids[first]),
+            m: Materials::gather(prims.scene, &ids),
             ids,
             inside: live & back.to_bitmask() as u8,
             live,
@@ -164,13 +166,14 @@ impl HitLanes {
             }
         }
         let first = bits(live).next()?;
+        let ids = ids.map(|id| if id == MaterialId::MAX { ids[first] } else { id });
         Some(HitLanes {
             t: f32x8::from(t),
             p: Vec3x8::from_lanes(&p),
             ng: Vec3x8::from_lanes(&ng),
             ns: Vec3x8::from_lanes(&ns),
             dir: Vec3x8::from_lanes(&std::array::from_fn(dir)),
-            m: Materials::gather(scene, &ids, ids[first]),
+            m: Materials::gather(scene, &ids),
             ids,
             inside,
             live,
@@ -217,19 +220,34 @@ impl HitLanes {
     ///
     /// [`Whitted::bounces`]: crate::render::whitted::Whitted::bounces
     #[inline]
-    pub fn bounces(&self, lanes: u8, spd: bool) -> [Spawned; 2] {
+    pub fn bounces(&self, scene: &Scene, lanes: u8, spd: bool) -> [Spawned; 2] {
         let (m, d, eps) = (&self.m, self.dir, f32x8::splat(EPSILON));
-        let (mut kr, mut total) = (f32x8::ONE, f32x8::ZERO);
+        let (mut kr, mut total, mut transmission) = (f32x8::ONE, f32x8::ZERO, f32x8::ZERO);
         let mut refracted = Spawned::NONE;
         let glass = lanes & m.transmits;
         if glass != 0 {
+            // Gathered here, not with the shading's materials: few packets hit a transmitter.
+            let ior;
+            (transmission, ior) = match m.shared {
+                Some(id) => {
+                    let one = &scene.materials[id as usize];
+                    (f32x8::splat(one.transmission), f32x8::splat(one.ior))
+                }
+                None => {
+                    let each = self.ids.map(|id| &scene.materials[id as usize]);
+                    (
+                        f32x8::from(each.map(|m| m.transmission)),
+                        f32x8::from(each.map(|m| m.ior)),
+                    )
+                }
+            };
             let inside = lane_mask(self.inside);
-            let (eta_i, eta_t) = (inside.select(m.ior, f32x8::ONE), inside.select(f32x8::ONE, m.ior));
+            let (eta_i, eta_t) = (inside.select(ior, f32x8::ONE), inside.select(f32x8::ONE, ior));
             let fresnel = schlick8(clamp01(-d.dot(self.ns)), eta_i, eta_t);
             let (t, all_reflected) = refract8(d, self.ns, eta_i / eta_t);
             total = lane_mask(glass) & all_reflected;
             kr = lane_mask(glass).select(total.select(f32x8::ONE, fresnel), f32x8::ONE);
-            let weight = m.transmission * (f32x8::ONE - kr);
+            let weight = transmission * (f32x8::ONE - kr);
             let kept = if spd { !0 } else { positive(weight) };
             refracted = Spawned {
                 lanes: glass & !(total.to_bitmask() as u8) & kept,
@@ -239,7 +257,7 @@ impl HitLanes {
             };
         }
         let weight = if spd {
-            total.select(m.ks + m.transmission, m.ks * kr)
+            total.select(m.ks + transmission, m.ks * kr)
         } else {
             m.ks * kr
         };
@@ -322,8 +340,6 @@ struct Materials {
     shininess: [f32; PACKET],
     diffuse: Vec3x8,
     specular: Vec3x8,
-    transmission: f32x8,
-    ior: f32x8,
     /// The lanes whose material has a highlight and a mirror (Ks > 0).
     glossy: u8,
     /// The lanes whose material transmits (refracts).
@@ -333,10 +349,10 @@ struct Materials {
 }
 
 impl Materials {
-    /// The materials `ids` (`MaterialId::MAX`: a dead lane, given `one`'s, a live lane's).
+    /// The materials `ids`.
     #[inline(always)]
-    fn gather(scene: &Scene, ids: &PerRay<MaterialId>, one: MaterialId) -> Self {
-        let ids = ids.map(|i| if i == MaterialId::MAX { one } else { i });
+    fn gather(scene: &Scene, ids: &PerRay<MaterialId>) -> Self {
+        let one = ids[0];
         let all = |yes: bool| if yes { !0 } else { 0 };
         if ids.iter().all(|&i| i == one) {
             let m = &scene.materials[one as usize];
@@ -346,8 +362,6 @@ impl Materials {
                 shininess: [m.shininess; PACKET],
                 diffuse: Vec3x8::splat(m.diffuse),
                 specular: Vec3x8::splat(m.specular),
-                transmission: f32x8::splat(m.transmission),
-                ior: f32x8::splat(m.ior),
                 glossy: all(m.ks > 0.0),
                 transmits: all(m.transmission > 0.0),
                 shared: Some(one),
@@ -365,8 +379,6 @@ impl Materials {
             shininess: m.map(|m| m.shininess),
             diffuse: Vec3x8::from_lanes(&m.map(|m| m.diffuse)),
             specular: Vec3x8::from_lanes(&m.map(|m| m.specular)),
-            transmission: f32x8::from(m.map(|m| m.transmission)),
-            ior: f32x8::from(m.map(|m| m.ior)),
             glossy: lanes(|m| m.ks > 0.0),
             transmits: lanes(|m| m.transmission > 0.0),
             shared: None,
