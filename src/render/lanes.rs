@@ -5,7 +5,7 @@
 //! divide and square root are exact per lane and Rust never fuses them, so lanes give the scalar
 //! path's bits.
 
-use std::ops::{Add, Mul, Neg, Sub};
+use std::ops::{Add, Div, Mul, Neg, Sub};
 
 use glam::Vec3;
 use wide::f32x8;
@@ -193,6 +193,19 @@ impl Mul<f32x8> for Vec3x8 {
     }
 }
 
+/// Each lane's vector divided by the lane's number (glam's `Vec3 / f32`).
+impl Div<f32x8> for Vec3x8 {
+    type Output = Self;
+    #[inline]
+    fn div(self, s: f32x8) -> Self {
+        Vec3x8 {
+            x: self.x / s,
+            y: self.y / s,
+            z: self.z / s,
+        }
+    }
+}
+
 /// The lanes of `mask` (bit `k`, lane `k`) as a lane mask for [`Vec3x8::select`].
 #[inline]
 pub(crate) fn lane_mask(mask: u8) -> f32x8 {
@@ -235,6 +248,7 @@ mod tests {
                 (-la).lanes(),
                 (la * lb).lanes(),
                 (la * f32x8::from(ls)).lanes(),
+                (la / f32x8::from(ls)).lanes(),
                 la.normalize().lanes(),
                 la.cross(lb).lanes(),
                 la.normalize_or_zero().lanes(),
@@ -248,6 +262,7 @@ mod tests {
                     -a[k],
                     a[k] * b[k],
                     a[k] * ls[k],
+                    a[k] / ls[k],
                     a[k].normalize(),
                     a[k].cross(b[k]),
                     a[k].normalize_or_zero(),

@@ -5,14 +5,16 @@
 //! surface, stay about as coherent as the camera rays.
 //!
 //! The camera rays, the hit points, the local shading (shadow-ray set-up and Blinn-Phong, light
-//! sample by light sample), opaque mirrors' reflected rays and the sum of what the bounces see run in
-//! lanes (`shade.rs`, `render/lanes.rs`), with the single-ray path's operations in its order; a
-//! transmitter's or a fuzzy mirror's rays (Fresnel's split, random draws, the split budget) come
-//! from [`Whitted::bounces`] lane by lane, and Beer's absorption from [`Whitted::absorbed`], as on
-//! the single-ray path. The accelerators' packet verbs answer each ray as their single-ray verbs do:
-//! the image is the single-ray path's, bit for bit.
+//! sample by light sample), smooth materials' refracted and reflected rays (Snell, Schlick's Fresnel
+//! split) and the sum of what they see run in lanes (`shade.rs`, `render/lanes.rs`), with the
+//! single-ray path's operations in its order; a fuzzy mirror's rays (its random draws), and a
+//! transmitter's once its sample has spent the split budget, come from [`Whitted::bounces`] lane by
+//! lane, and Beer's absorption from [`Whitted::absorbed`], as on the single-ray path. The
+//! accelerators' packet verbs answer each ray as their single-ray verbs do: the image is the
+//! single-ray path's, bit for bit.
 
 use glam::{Vec2, Vec3};
+use wide::f32x8;
 
 use super::shade::{HitLanes, light};
 use super::{BLOCK_H, BLOCK_W, PerRay, TilePixels, coherent};
@@ -282,10 +284,10 @@ impl Renderer<'_> {
                         }
                     }
                 }
+                let means = sums / f32x8::splat(self.samples() as f32);
                 for k in bits(active) {
                     let (x, y) = pixel(k);
-                    buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] =
-                        sums.lane(k) / self.samples() as f32;
+                    buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] = means.lane(k);
                 }
             }
         }

@@ -1,11 +1,13 @@
 //! Eight hits shaded at once, for the kernels that hold them together (packets, and the stream
-//! kernel's generations): each light sample's eight shadow rays set up in lanes, and the Blinn-Phong
-//! sum in lanes. The operations are the single-ray path's in its order ([`ShadowRay::new`],
-//! [`Whitted::shade_surface`]), lane by lane, so the bits are its bits; only `powf` goes lane by lane,
-//! as the scalar function.
+//! kernel's generations): the packet's hit points and normals computed in lanes, each light sample's
+//! eight shadow rays set up in lanes, the Blinn-Phong sum in lanes, and the packet's refracted and
+//! reflected rays set up in lanes. The operations are the single-ray path's in its order
+//! ([`Prims::surface`], [`ShadowRay::new`], [`Whitted::shade_surface`], [`Whitted::bounces`]), lane
+//! by lane, so the bits are its bits; only `powf` goes lane by lane, as the scalar function.
 //!
 //! [`ShadowRay::new`]: crate::render::whitted::ShadowRay::new
 //! [`Whitted::shade_surface`]: crate::render::whitted::Whitted::shade_surface
+//! [`Whitted::bounces`]: crate::render::whitted::Whitted::bounces
 
 use glam::Vec3;
 use wide::f32x8;
@@ -53,6 +55,7 @@ pub(super) struct ShadowLanes {
 pub(super) struct Spawned {
     /// The lanes that spawn one.
     pub lanes: u8,
+    /// Where the rays start (just off the surface), their unit directions and their weights.
     pub origin: Vec3x8,
     pub dir: Vec3x8,
     pub weight: f32x8,
