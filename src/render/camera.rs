@@ -5,6 +5,7 @@ use wide::f32x8;
 
 use crate::geometry::length_and_direction;
 use crate::geometry::ray::Ray;
+use crate::render::lanes::Vec3x8;
 use crate::scene::Camera;
 
 /// A camera ready to generate rays: an orthonormal frame and the view-plane scale, computed once.
@@ -86,12 +87,20 @@ impl RayCamera {
         let s = f32x8::splat;
         let sx = (s(2.0) * f32x8::from(x) / s(self.width as f32) - s(1.0)) * s(self.half.0);
         let sy = (s(1.0) - s(2.0) * f32x8::from(y) / s(self.height as f32)) * s(self.half.1);
-        let axis = |i: usize| s(self.forward[i]) + sx * s(self.right[i]) + sy * s(self.up[i]);
-        let d = [axis(0), axis(1), axis(2)];
-        // glam's `normalize`: times the reciprocal of the length, (x² + y²) + z² summed in that order.
-        let inv = s(1.0) / (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-        let d = d.map(|c| (c * inv).to_array());
-        std::array::from_fn(|k| Ray::new(self.eye, Vec3::new(d[0][k], d[1][k], d[2][k])))
+        let through =
+            Vec3x8::splat(self.forward) + Vec3x8::splat(self.right) * sx + Vec3x8::splat(self.up) * sy;
+        let d = through.normalize();
+        std::array::from_fn(|k| Ray::new(self.eye, d.lane(k)))
+    }
+
+    /// The ray of a sample that passes through image point `at`: from lens point `lens` where the
+    /// camera has a lens ([`lens_ray`](Self::lens_ray)), else the pinhole's ([`ray`](Self::ray)).
+    #[inline]
+    pub fn sample_ray(&self, at: Vec2, lens: Option<Vec2>) -> Ray {
+        match lens {
+            Some(lens) => self.lens_ray(at.x, at.y, lens),
+            None => self.ray(at.x, at.y),
+        }
     }
 
     /// The direction through image point `(x, y)`, scaled to reach the plane one unit ahead.

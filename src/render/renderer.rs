@@ -184,24 +184,6 @@ impl<'a> Renderer<'a> {
         (corner + p, lens, sample)
     }
 
-    /// Sample `s` of pixel `(x, y)`: its camera ray and what it carries ([`sample_start`](Self::sample_start)).
-    #[inline]
-    pub(super) fn camera_sample(
-        &self,
-        x: u32,
-        y: u32,
-        pass: u32,
-        s: u32,
-        pattern: &PixelPattern,
-    ) -> (Ray, PixelSample<'_>) {
-        let (at, lens, sample) = self.sample_start(x, y, pass, s, pattern);
-        let ray = match lens {
-            Some(lens) => self.camera.lens_ray(at.x, at.y, lens),
-            None => self.camera.ray(at.x, at.y),
-        };
-        (ray, sample)
-    }
-
     /// The camera, for the kernels' rays.
     pub(super) fn camera(&self) -> &RayCamera {
         &self.camera

@@ -175,7 +175,7 @@ impl HitLanes {
             p: Vec3x8::from_lanes(&p),
             ng: Vec3x8::from_lanes(&ng),
             ns: Vec3x8::from_lanes(&ns),
-            dir: Vec3x8::from_lanes(&std::array::from_fn(dir)),
+            dir: Vec3x8::from_fn(dir),
             m: Materials::gather(scene, &ids),
             ids,
             inside,
@@ -207,7 +207,7 @@ impl HitLanes {
     /// Lane `k`'s surface, as [`Prims::surface`] gives it.
     pub fn surface(&self, k: usize) -> Surface {
         Surface {
-            t: self.t.to_array()[k],
+            t: self.t.as_array()[k],
             point: self.p.lane(k),
             geometric: self.ng.lane(k),
             shading: self.ns.lane(k),
@@ -330,6 +330,7 @@ pub(super) fn light(i: usize, lights: &PerRay<Lights>) -> (Vec3x8, Vec3) {
     let at = if lights[0].shared(i) {
         Vec3x8::splat(one.position)
     } else {
+        // An array first: through `Vec3x8::from_fn` the light loop ran more instructions.
         Vec3x8::from_lanes(&std::array::from_fn(|k| lights[k].get(i).position))
     };
     (at, one.color)

@@ -51,7 +51,8 @@ impl Renderer<'_> {
         self.fill_pattern(x, y, pass, pattern);
         let mut sum = Vec3::ZERO;
         for s in 0..self.samples() {
-            let (ray, mut sample) = self.camera_sample(x, y, pass, s, pattern);
+            let (at, lens, mut sample) = self.sample_start(x, y, pass, s, pattern);
+            let ray = self.camera().sample_ray(at, lens);
             sum += self.whitted.trace(&ray, 0, RayKind::Camera, &mut sample);
             sample.rays.primary += 1;
             *rays += sample.rays;

@@ -184,7 +184,8 @@ impl Renderer<'_> {
                 let pixel = (y - tile.y0) * TILE + (x - tile.x0);
                 self.fill_pattern(x, y, pass, &mut pattern);
                 for s in 0..samples as u32 {
-                    let (ray, sample) = self.camera_sample(x, y, pass, s, &pattern);
+                    let (at, lens, sample) = self.sample_start(x, y, pass, s, &pattern);
+                    let ray = self.camera().sample_ray(at, lens);
                     let id = walks.len() as u32;
                     walks.push(Walk {
                         sample: PixelSample { slot: id, ..sample },
