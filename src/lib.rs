@@ -41,6 +41,7 @@
 pub mod accel;
 pub mod digest;
 pub mod error;
+pub mod files;
 pub mod geometry;
 #[cfg(feature = "kit")]
 pub mod kit;

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 use whitted::parts;
 
-use super::outputs;
+use super::{Failure, outputs};
 
 /// Arguments of `whitted merge`.
 #[derive(Args)]
@@ -26,8 +26,17 @@ pub struct MergeArgs {
 
 /// Checks the output, then checks and merges the parts and writes the image (nothing is written if
 /// any check fails).
-pub fn run(args: &MergeArgs) -> whitted::Result<()> {
+pub fn run(args: &MergeArgs) -> Result<(), Failure> {
     outputs::check(&args.output, false)?;
+    if let Some(part) = args.parts.iter().find(|p| outputs::same_file(&args.output, p)) {
+        return Err(Failure::Usage(whitted::Error::file(
+            &args.output,
+            format!(
+                "is one of the parts ({}): the merged image would replace it; name another output",
+                part.display()
+            ),
+        )));
+    }
     let film = parts::merge::merge(&args.parts)?;
     film.write(&args.output, args.srgb)?;
     if !args.quiet {

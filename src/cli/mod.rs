@@ -4,9 +4,9 @@
 //! disk, the scene), reported in one line on stderr (`whitted: path:line:col: message`); 2 on a usage
 //! error, the command line's own fault (clap's: an unknown option, a value that does not parse or is
 //! out of its range; ours, once the scene is read: options that do not go together, or overrides that
-//! make an impossible frame or camera); 130 when Ctrl-C interrupted a render, after writing what was
-//! finished and saying so on stderr (128 + SIGINT, what a shell reports for a process the signal
-//! killed).
+//! make an impossible frame or camera); 130, 143 or 129 when SIGINT (Ctrl-C), SIGTERM or SIGHUP
+//! interrupted a render, after writing what was finished and saying so on stderr, or ended another
+//! command (128 + the signal's number, what a shell reports for a process the signal killed).
 
 mod bench;
 mod console;
@@ -17,6 +17,7 @@ mod outputs;
 mod render;
 mod report;
 mod setup;
+mod signals;
 mod values;
 #[cfg(feature = "view")]
 mod view;
@@ -50,9 +51,6 @@ enum Command {
     #[cfg(feature = "view")]
     View(view::ViewArgs),
 }
-
-/// The exit status of an interrupted command: 128 + SIGINT.
-const INTERRUPTED: u8 = 130;
 
 /// The exit status of a usage error (clap's).
 const USAGE: u8 = 2;
@@ -94,13 +92,21 @@ pub fn main() -> ExitCode {
         Command::Info(args) => done(info::run(&args)),
         Command::Render(args) => render::run(&args),
         Command::Bench(args) => done(bench::run(&args)),
-        Command::Merge(args) => done(merge::run(&args).map_err(Failure::from)),
+        Command::Merge(args) => {
+            signals::handle(false);
+            done(merge::run(&args))
+        }
         #[cfg(feature = "view")]
-        Command::View(args) => done(view::run(&args)),
+        Command::View(args) => {
+            signals::handle(false);
+            done(view::run(&args))
+        }
     };
     match result {
         Ok(Ended::Done) => ExitCode::SUCCESS,
-        Ok(Ended::Interrupted) => ExitCode::from(INTERRUPTED),
+        Ok(Ended::Interrupted) => ExitCode::from(signals::status(
+            signals::received().unwrap_or(signal_hook::consts::SIGINT),
+        )),
         Err(Failure::Error(e)) => {
             console::note(format!("whitted: {e}"));
             ExitCode::FAILURE

@@ -3,7 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-use whitted::render::film::{ImageFormat, check_writable};
+use whitted::files::{check_writable, takes_new_files};
+use whitted::render::film::ImageFormat;
 
 /// Checks that `path` names an image format (or, with `partial`, takes a `.partial` file) and can be
 /// written as the render will write it ([`check_writable`]).
@@ -14,27 +15,39 @@ pub fn check(path: &Path, partial: bool) -> whitted::Result<()> {
     check_writable(path)
 }
 
-/// Checks that `dir`, the snapshots' directory (`--progressive-out`), is neither `output` nor `stop`,
-/// the file an interrupted render keeps its sums in, nor under them.
-pub fn apart(dir: &Path, output: &Path, stop: &Path) -> whitted::Result<()> {
-    // Lexically, as the names are written: neither may exist yet.
+/// Whether `a` and `b` are one file (the same device and inode, whatever the names; links followed).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match (std::fs::metadata(a), std::fs::metadata(b)) {
+            (Ok(a), Ok(b)) => (a.dev(), a.ino()) == (b.dev(), b.ino()),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        matches!((std::fs::canonicalize(a), std::fs::canonicalize(b)), (Ok(a), Ok(b)) if a == b)
+    }
+}
+
+/// Checks that `dir`, the snapshots' directory (`--progressive-out`), is none of the render's `files`
+/// (each with what it is: the output image, the stop file, a heatmap's file), nor under one.
+pub fn apart(dir: &Path, files: &[(&Path, &str)]) -> whitted::Result<()> {
+    // Lexically, as the names are written: none may exist yet.
     let same = |other: &Path| match (std::path::absolute(dir), std::path::absolute(other)) {
         (Ok(a), Ok(b)) => a.starts_with(b),
         _ => false,
     };
-    let what = if same(output) {
-        "the output image"
-    } else if same(stop) {
-        "the file an interrupted render keeps its sums in"
-    } else {
-        return Ok(());
-    };
-    Err(whitted::Error::file(
-        dir,
-        format!(
-            "--progressive-out names {what}, or a directory under it: expected a directory of its own for the snapshots"
-        ),
-    ))
+    match files.iter().find(|(file, _)| same(file)) {
+        None => Ok(()),
+        Some((_, what)) => Err(whitted::Error::file(
+            dir,
+            format!(
+                "--progressive-out names {what}, or a directory under it: expected a directory of its own for the snapshots"
+            ),
+        )),
+    }
 }
 
 /// Checks, without creating anything, that the snapshots of `output` (`--progressive-out`, after any
@@ -59,7 +72,9 @@ pub fn check_snapshots(dir: &Path, output: &Path, passes: u32) -> whitted::Resul
         ));
     }
     if existing != dir {
-        return check_writable(&existing.join(snapshot(Path::new(""), output, 1)));
+        // Made at the first snapshot: what exists of its path must take new entries.
+        return takes_new_files(existing)
+            .map_err(|e| whitted::Error::file(dir, format!("cannot make the directory: {e}")));
     }
     let entries = std::fs::read_dir(dir)
         .map_err(|e| whitted::Error::file(dir, format!("cannot read the directory: {e}")))?;
@@ -146,7 +161,11 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
         let (out, stop) = (d.join("x.png"), d.join("x.png.partial"));
-        let e = apart(&out, &out, &stop).unwrap_err().to_string();
+        let files = [
+            (out.as_path(), "the output image"),
+            (stop.as_path(), "the file an interrupted render keeps its sums in"),
+        ];
+        let e = apart(&out, &files).unwrap_err().to_string();
         assert!(
             e.ends_with(
                 "--progressive-out names the output image, or a directory under it: expected a directory of its own for the snapshots"
@@ -154,16 +173,14 @@ mod tests {
             "{e}"
         );
         assert!(!out.exists());
-        let e = apart(&d.join("./x.png.partial"), &out, &stop)
-            .unwrap_err()
-            .to_string();
+        let e = apart(&d.join("./x.png.partial"), &files).unwrap_err().to_string();
         assert!(
             e.contains("names the file an interrupted render keeps its sums in"),
             "{e}"
         );
-        apart(&d.join("pg"), &out, &stop).unwrap();
-        apart(&d.join("x.png-snaps"), &out, &stop).unwrap();
-        let e = apart(&d.join("x.png.partial/snaps"), &out, &stop)
+        apart(&d.join("pg"), &files).unwrap();
+        apart(&d.join("x.png-snaps"), &files).unwrap();
+        let e = apart(&d.join("x.png.partial/snaps"), &files)
             .unwrap_err()
             .to_string();
         assert!(e.contains("a directory under it"), "{e}");

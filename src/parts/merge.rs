@@ -7,18 +7,21 @@ use std::path::{Path, PathBuf};
 use super::partial::{Part, PartSettings};
 use crate::error::{Error, Result};
 use crate::render::film::Film;
+use crate::render::memory;
 use crate::render::progressive::mean;
 use crate::render::tiles::{self, Tile};
 
 /// Reads the parts and merges them into the frame, after checking that they are parts of one render
-/// and cover each pixel's passes exactly once; every error names the file(s) at fault.
+/// and cover each pixel's passes exactly once; every error names the file(s) at fault. One part is in
+/// memory at a time: each is read once to be checked (its sums then dropped) and once to be added,
+/// after the memory the merge needs was found available ([`memory::check_merge`]).
 pub fn merge(paths: &[PathBuf]) -> Result<Film> {
     let Some(first_path) = paths.first() else {
         return Err(Error::msg("no partial files to merge"));
     };
     let mut parts = Vec::with_capacity(paths.len());
     for path in paths {
-        parts.push((path.as_path(), Part::read(path)?));
+        parts.push((path.as_path(), layout(&Part::read(path)?)));
     }
     let settings = parts[0].1.settings;
     for (path, part) in &parts[1..] {
@@ -35,15 +38,20 @@ pub fn merge(paths: &[PathBuf]) -> Result<Film> {
         }
     }
     check_coverage(&parts, &settings)?;
+    let (w, h) = (settings.width, settings.height);
+    memory::check_merge(w, h).map_err(Error::msg)?;
 
     // Sum in pass order (then tile order), whatever order the files were named in, so that the
     // result does not depend on it.
     parts.sort_by_key(|(_, p)| (p.passes.start, p.tiles.first().copied()));
-    let (w, h) = (settings.width, settings.height);
     let grid = tiles::tiles(w, h);
     let mut sums = vec![[0.0f64; 3]; w as usize * h as usize];
     let mut counts = vec![0u32; sums.len()];
-    for (_, part) in &parts {
+    for (path, checked) in &parts {
+        let part = Part::read(path)?;
+        if layout(&part) != *checked {
+            return Err(Error::file(path, "changed while the parts were merged"));
+        }
         let mut at = 0;
         for &i in &part.tiles {
             let t = grid[i as usize];
@@ -64,6 +72,18 @@ pub fn merge(paths: &[PathBuf]) -> Result<Film> {
         *pixel = mean(*sum, f64::from(*n));
     }
     Ok(film)
+}
+
+/// A part without its pixels: what the checks need of it.
+fn layout(part: &Part) -> Part {
+    Part {
+        settings: part.settings,
+        passes: part.passes.clone(),
+        part: part.part,
+        tiles: part.tiles.clone(),
+        sums: Vec::new(),
+        counts: Vec::new(),
+    }
 }
 
 /// Checks that every tile's passes `0..settings.passes` are covered by exactly one part each.

@@ -27,8 +27,8 @@ use std::path::Path;
 
 use crate::digest;
 use crate::error::{Error, Result};
+use crate::files::{NotOpened, open_regular, write_atomically};
 use crate::render::Options;
-use crate::render::film::write_atomically;
 use crate::render::progressive::{Progressive, area};
 use crate::render::tiles::{self, TILE};
 use crate::scene::{Scene, check_resolution};
@@ -221,8 +221,8 @@ impl Part {
 
     /// Writes the part to `path` (under a temporary name first, then renamed: never half a file).
     pub fn write(&self, path: &Path) -> Result<()> {
-        write_atomically(path, |tmp| {
-            std::fs::write(tmp, self.to_bytes()).map_err(|e| e.to_string())
+        write_atomically(path, |file| {
+            std::io::Write::write_all(file, &self.to_bytes()).map_err(|e| e.to_string())
         })
         .map_err(|e| Error::file(path, format!("cannot write the partial file: {e}")))
     }
@@ -299,11 +299,11 @@ impl Part {
 /// [`Part::read`], its error without the path.
 fn read_checked(path: &Path) -> std::result::Result<Part, String> {
     let cannot = |e: std::io::Error| format!("cannot read the partial file: {e}");
-    let mut file = std::fs::File::open(path).map_err(cannot)?;
+    let mut file = open_regular(path).map_err(|e| match e {
+        NotOpened::Io(e) => cannot(e),
+        NotOpened::NotRegular => format!("{e}, so not a partial file"),
+    })?;
     let metadata = file.metadata().map_err(cannot)?;
-    if !metadata.is_file() {
-        return Err("is not a regular file (a device, a pipe or a directory), so not a partial file".into());
-    }
     let len = usize::try_from(metadata.len()).unwrap_or(usize::MAX);
     // Reads up to `n` more bytes (fewer at the end of the file).
     let mut bytes = Vec::new();

@@ -1,12 +1,12 @@
 //! The film: linear `f32` RGB, turned into 8 bits (clamped, optionally sRGB-encoded) only when written.
-//! Files are written to a temporary name beside the target and renamed, so a failed or interrupted write
-//! never leaves half an image under the real name.
+//! Files are written through [`write_atomically`]: never half an image under the real name.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::Vec3;
 
 use crate::error::{Error, Result};
+use crate::files::write_atomically;
 
 /// A width × height image of linear RGB.
 #[derive(Clone, Debug, PartialEq)]
@@ -64,16 +64,15 @@ impl Film {
     /// chunk of 1.0 (linear values), so viewers show what the numbers mean.
     pub fn write(&self, path: &Path, srgb: bool) -> Result<()> {
         let format = ImageFormat::of(path)?;
-        write_atomically(path, |tmp| {
-            let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
-            let out = std::io::BufWriter::new(file);
-            match format {
-                ImageFormat::Png => self.write_png(out, srgb).map_err(|e| e.to_string()),
+        write_atomically(path, |file| {
+            let mut out = Recorded::new(std::io::BufWriter::new(file));
+            let encoded = match format {
+                ImageFormat::Png => self.write_png(&mut out, srgb).map_err(|e| e.to_string()),
                 ImageFormat::Ppm => {
                     // A binary P6 pixmap: the image crate's default PNM flavour is PAM (P7), which
                     // few viewers read under a .ppm name.
                     use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
-                    PnmEncoder::new(out)
+                    PnmEncoder::new(&mut out)
                         .with_subtype(PnmSubtype::Pixmap(SampleEncoding::Binary))
                         .encode(
                             &self.to_rgb8(srgb)[..],
@@ -83,22 +82,25 @@ impl Film {
                         )
                         .map_err(|e| e.to_string())
                 }
-                ImageFormat::Jpeg => image::codecs::jpeg::JpegEncoder::new_with_quality(out, JPEG_QUALITY)
-                    .encode(
-                        &self.to_rgb8(srgb),
-                        self.width,
-                        self.height,
-                        image::ExtendedColorType::Rgb8,
-                    )
-                    .map_err(|e| e.to_string()),
+                ImageFormat::Jpeg => {
+                    image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, JPEG_QUALITY)
+                        .encode(
+                            &self.to_rgb8(srgb),
+                            self.width,
+                            self.height,
+                            image::ExtendedColorType::Rgb8,
+                        )
+                        .map_err(|e| e.to_string())
+                }
                 ImageFormat::Exr => {
                     let data: Vec<f32> = self.pixels.iter().flat_map(|p| p.to_array()).collect();
                     image::Rgb32FImage::from_raw(self.width, self.height, data)
                         .expect("buffer size matches")
-                        .write_with_encoder(image::codecs::openexr::OpenExrEncoder::new(out))
+                        .write_with_encoder(image::codecs::openexr::OpenExrEncoder::new(&mut out))
                         .map_err(|e| e.to_string())
                 }
-            }
+            };
+            out.finish(encoded)
         })
         .map_err(|e| Error::file(path, format!("cannot write the image: {e}")))
     }
@@ -113,9 +115,10 @@ impl Film {
 /// ([`write_atomically`]), its colour space recorded as [`Film::write`] records it: for images made
 /// as bytes (a heatmap's colours), which need no film.
 pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8], srgb: bool) -> Result<()> {
-    write_atomically(path, |tmp| {
-        let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
-        encode_png(std::io::BufWriter::new(file), width, height, rgb, srgb).map_err(|e| e.to_string())
+    write_atomically(path, |file| {
+        let mut out = Recorded::new(std::io::BufWriter::new(file));
+        let encoded = encode_png(&mut out, width, height, rgb, srgb).map_err(|e| e.to_string());
+        out.finish(encoded)
     })
     .map_err(|e| Error::file(path, format!("cannot write the image: {e}")))
 }
@@ -142,6 +145,57 @@ fn encode_png(
     writer.finish()
 }
 
+/// A writer that keeps the first I/O error it met: encoders wrap such errors in their own words (the
+/// EXR encoder's "Format error decoding OpenExr" for a full disk), and the user needs the system's.
+struct Recorded<W> {
+    inner: W,
+    error: Option<std::io::Error>,
+}
+
+impl<W: std::io::Write> Recorded<W> {
+    fn new(inner: W) -> Self {
+        Recorded { inner, error: None }
+    }
+
+    /// The encoder's result, its output flushed: the system's error where one was met, else the
+    /// encoder's.
+    fn finish(mut self, encoded: std::result::Result<(), String>) -> std::result::Result<(), String> {
+        let flushed = encoded.and_then(|()| std::io::Write::flush(&mut self).map_err(|e| e.to_string()));
+        match self.error {
+            Some(e) if flushed.is_err() => Err(e.to_string()),
+            _ => flushed,
+        }
+    }
+
+    fn record<T>(&mut self, result: std::io::Result<T>) -> std::io::Result<T> {
+        if let Err(e) = &result
+            && self.error.is_none()
+        {
+            self.error = Some(std::io::Error::new(e.kind(), e.to_string()));
+        }
+        result
+    }
+}
+
+impl<W: std::io::Write> std::io::Write for Recorded<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let written = self.inner.write(buf);
+        self.record(written)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        let flushed = self.inner.flush();
+        self.record(flushed)
+    }
+}
+
+impl<W: std::io::Write + std::io::Seek> std::io::Seek for Recorded<W> {
+    fn seek(&mut self, to: std::io::SeekFrom) -> std::io::Result<u64> {
+        let sought = self.inner.seek(to);
+        self.record(sought)
+    }
+}
+
 /// JPEG quality (of 100): high enough that the 8-bit rounding, not the codec, dominates the error.
 const JPEG_QUALITY: u8 = 95;
 
@@ -161,10 +215,10 @@ pub enum ImageFormat {
 impl ImageFormat {
     /// The format `path`'s extension names, or an error that lists the known ones.
     pub fn of(path: &Path) -> Result<Self> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
+        // A name that is only an extension (`.png`) is a hidden file of that format, though `Path`
+        // sees no extension in it.
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        let ext = name.rsplit_once('.').map(|(_, e)| e.to_ascii_lowercase());
         match ext.as_deref() {
             Some("png") => Ok(ImageFormat::Png),
             Some("ppm") => Ok(ImageFormat::Ppm),
@@ -176,87 +230,6 @@ impl ImageFormat {
             )),
         }
     }
-}
-
-/// Checks, before any work, that `path` can be written as [`write_atomically`] will: its directory
-/// exists and takes a new file (one is created there and removed), and what is at `path`, if
-/// anything, is a regular file it may replace.
-pub fn check_writable(path: &Path) -> Result<()> {
-    check_target(path).map_err(|e| Error::file(path, e))?;
-    let tmp = temporary_name(path);
-    std::fs::File::create(&tmp)
-        .and_then(|_| std::fs::remove_file(&tmp))
-        .map_err(|e| Error::file(path, format!("cannot write in {}: {e}", dir_of(path).display())))
-}
-
-/// The directory a path's file goes in.
-fn dir_of(path: &Path) -> &Path {
-    match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    }
-}
-
-/// What is at `path` may be replaced: nothing, or a regular file (not a directory, a link or a device,
-/// which a rename would replace by a file).
-fn check_target(path: &Path) -> std::result::Result<(), String> {
-    // `Path` drops a trailing separator from its components: `o/q.png/` would pass as `o/q.png`
-    // and fail only at the end of the render.
-    if path
-        .as_os_str()
-        .as_encoded_bytes()
-        .ends_with(std::path::MAIN_SEPARATOR_STR.as_bytes())
-    {
-        return Err("names a directory (it ends in a path separator): expected a file name".into());
-    }
-    let dir = dir_of(path);
-    if !dir.is_dir() {
-        return Err(format!("the directory {} does not exist", dir.display()));
-    }
-    match std::fs::symlink_metadata(path) {
-        Ok(m) if !m.file_type().is_file() => {
-            Err("is not a regular file (a directory, a link or a device); refusing to replace it".into())
-        }
-        _ => Ok(()),
-    }
-}
-
-/// Writes `path` through `write`, which fills a temporary file beside it (same directory, so the
-/// rename is atomic), then renames that into place: a failed or interrupted write never leaves half a
-/// file under the real name, and an existing file keeps its permissions. Refuses to replace anything
-/// but a regular file. On failure the temporary is removed.
-pub fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
-) -> std::result::Result<(), String> {
-    check_target(path)?;
-    let previous = std::fs::metadata(path).ok().map(|m| m.permissions());
-    let tmp = temporary_name(path);
-    let result = write(&tmp).and_then(|()| {
-        if let Some(permissions) = previous {
-            std::fs::set_permissions(&tmp, permissions).map_err(|e| e.to_string())?;
-        }
-        std::fs::rename(&tmp, path).map_err(|e| e.to_string())
-    });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
-}
-
-/// `dir/.name.PID.tmp.ext`: in the same directory (so the rename is atomic), hidden, unique per process.
-fn temporary_name(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    // Keep the real extension last: the encoder is chosen explicitly, but tools that glance at the
-    // directory should still see what the file is.
-    path.with_file_name(format!(".{name}.{}.tmp.{ext}", std::process::id()))
 }
 
 #[cfg(test)]
@@ -329,65 +302,5 @@ mod tests {
                 assert_eq!(info.gama_chunk, Some(png::ScaledFloat::new(1.0)));
             }
         }
-    }
-
-    /// A write that fails after its temporary file was created leaves no temporary and no output; an
-    /// existing output keeps its permissions when replaced; links and directories are not replaced.
-    #[cfg(unix)]
-    #[test]
-    fn atomic_writes_clean_up_keep_permissions_and_refuse_non_files() {
-        use std::os::unix::fs::PermissionsExt;
-        let dir = tempfile::tempdir().unwrap();
-        let out = dir.path().join("a.png");
-        let failed = write_atomically(&out, |tmp| {
-            std::fs::write(tmp, b"half").unwrap();
-            Err("the encoder failed".into())
-        });
-        assert_eq!(failed.unwrap_err(), "the encoder failed");
-        assert_eq!(
-            std::fs::read_dir(dir.path()).unwrap().count(),
-            0,
-            "a temporary was left behind"
-        );
-
-        let film = Film::new(2, 1);
-        film.write(&out, false).unwrap();
-        std::fs::set_permissions(&out, std::fs::Permissions::from_mode(0o444)).unwrap();
-        film.write(&out, true).unwrap();
-        assert_eq!(
-            std::fs::metadata(&out).unwrap().permissions().mode() & 0o777,
-            0o444
-        );
-
-        let link = dir.path().join("link.png");
-        std::os::unix::fs::symlink(&out, &link).unwrap();
-        let e = film.write(&link, false).unwrap_err().to_string();
-        assert!(e.contains("is not a regular file"), "{e}");
-        assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
-        let sub = dir.path().join("sub.png");
-        std::fs::create_dir(&sub).unwrap();
-        assert!(
-            film.write(&sub, false)
-                .unwrap_err()
-                .to_string()
-                .contains("is not a regular file")
-        );
-        assert_eq!(
-            check_writable(&dir.path().join("nowhere/x.png"))
-                .unwrap_err()
-                .to_string(),
-            format!(
-                "{}: the directory {} does not exist",
-                dir.path().join("nowhere/x.png").display(),
-                dir.path().join("nowhere").display()
-            )
-        );
-        check_writable(&dir.path().join("new.png")).unwrap();
-        assert!(!dir.path().join("new.png").exists());
-        assert_eq!(
-            ImageFormat::of(Path::new("x.gif")).unwrap_err().to_string(),
-            "x.gif: unknown image format: expected a .png, .ppm, .jpg, .jpeg or .exr file name"
-        );
-        assert_eq!(ImageFormat::of(Path::new("x.JPG")).unwrap(), ImageFormat::Jpeg);
     }
 }

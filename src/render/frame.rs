@@ -50,8 +50,9 @@ impl Renderer<'_> {
 
     /// Renders pass `pass` of `tiles` only (a part of the frame), in parallel. A pixel's colour depends
     /// only on the seed, the pixel and the pass, so any split of the tiles renders the same pixels.
-    /// `on_tile` is as for [`Renderer::render_pass`]; once `stop` is set, the tiles not yet started are
-    /// skipped and the [`TilePass`] holds the ones finished, for a caller that keeps them.
+    /// `on_tile` is as for [`Renderer::render_pass`]; once `stop` is set, the tiles not yet finished
+    /// are left (a tile being rendered within a pixel or block) and the [`TilePass`] holds the ones
+    /// finished, for a caller that keeps them.
     pub fn render_tiles(
         &self,
         pass: u32,
@@ -85,12 +86,21 @@ impl Renderer<'_> {
                     .then(|| vec![RayCounts::default(); set.len() * per_tile]);
                 let first = pixels.as_deref_mut().map(|p| &mut p[..per_tile]);
                 match kernel {
-                    Kernel::Single => self.tile_single(set[0], pass, &mut bufs[0], &mut counts[0], first),
-                    Kernel::Packet => self.tile_packets(set[0], pass, &mut bufs[0], &mut counts[0], first),
+                    Kernel::Single => {
+                        self.tile_single(set[0], pass, &mut bufs[0], &mut counts[0], first, stop)
+                    }
+                    Kernel::Packet => {
+                        self.tile_packets(set[0], pass, &mut bufs[0], &mut counts[0], first, stop)
+                    }
                     Kernel::Stream => {
                         let all = pixels.as_deref_mut().unwrap_or_default();
-                        self.tiles_streamed(set, pass, &mut bufs, &mut counts, all)
+                        self.tiles_streamed(set, pass, &mut bufs, &mut counts, all, stop)
                     }
+                }
+                // A kernel stops within its tiles once `stop` is set (a tile of many samples a pixel
+                // takes long): what it left may be half done, so none of it is kept.
+                if stop.load(Ordering::Relaxed) {
+                    return vec![None; set.len()];
                 }
                 set.iter()
                     .zip(bufs)

@@ -23,28 +23,63 @@ pub fn frame_bytes(width: u32, height: u32, counted: bool) -> u64 {
     u64::from(width) * u64::from(height) * per_pixel(counted)
 }
 
+/// Bytes a pixel takes at the peak of `merge`: the frame's `f64` sums and pass counts (28), the film of
+/// their mean (12), the 8-bit image and the encoder's copy (6), and the one part read at a time, which
+/// may cover the whole frame (28).
+pub const MERGE_BYTES_PER_PIXEL: u64 = 74;
+
 /// Refuses a frame that needs more memory than this process can still use ([`available`]); a
-/// frame whose need cannot be compared (no figure to read) is let through.
-pub fn check(width: u32, height: u32, counted: bool) -> Result<(), String> {
-    check_against(width, height, counted, available())
+/// frame whose need cannot be compared (no figure to read) is let through. `parts` says whether the
+/// command can render the frame in parts (`render --tiles`), which the advice then offers.
+pub fn check(width: u32, height: u32, counted: bool, parts: bool) -> Result<(), String> {
+    check_against(width, height, counted, parts, available())
 }
 
 /// [`check`] against `available` bytes.
-pub fn check_against(width: u32, height: u32, counted: bool, available: Option<u64>) -> Result<(), String> {
-    let need = frame_bytes(width, height, counted);
-    let (what, instead) = if counted {
-        (", counting steps", "leave out --counters and --heatmap")
-    } else {
-        ("", "render it in parts (--tiles K/N)")
+pub fn check_against(
+    width: u32,
+    height: u32,
+    counted: bool,
+    parts: bool,
+    available: Option<u64>,
+) -> Result<(), String> {
+    let (what, instead) = match (counted, parts) {
+        (true, _) => (
+            ", counting steps",
+            "lower the resolution, or leave out --counters and --heatmap",
+        ),
+        (false, true) => ("", "lower the resolution, or render it in parts (--tiles K/N)"),
+        (false, false) => ("", "lower the resolution"),
     };
+    let need = frame_bytes(width, height, counted);
+    let what = format!(
+        "a {width}x{height} frame needs {} ({} bytes a pixel{what})",
+        gib(need),
+        per_pixel(counted)
+    );
+    refuse(need, &what, instead, available)
+}
+
+/// Refuses to merge the parts of a `width` × `height` frame where this process cannot have the
+/// memory it takes ([`MERGE_BYTES_PER_PIXEL`]).
+pub fn check_merge(width: u32, height: u32) -> Result<(), String> {
+    let need = u64::from(width) * u64::from(height) * MERGE_BYTES_PER_PIXEL;
+    let what = format!(
+        "merging a {width}x{height} frame needs {} ({MERGE_BYTES_PER_PIXEL} bytes a pixel)",
+        gib(need)
+    );
+    refuse(
+        need,
+        &what,
+        "merge on a machine with more memory free",
+        available(),
+    )
+}
+
+/// `Err` where `need` bytes are more than `available`: "`what` and only N GiB is available: `instead`".
+fn refuse(need: u64, what: &str, instead: &str, available: Option<u64>) -> Result<(), String> {
     match available {
-        Some(have) if need > have => Err(format!(
-            "a {width}x{height} frame needs {} ({} bytes a pixel{what}) and only {} is available: lower \
-             the resolution, or {instead}",
-            gib(need),
-            per_pixel(counted),
-            gib(have)
-        )),
+        Some(have) if need > have => Err(format!("{what} and only {} is available: {instead}", gib(have))),
         _ => Ok(()),
     }
 }
@@ -105,21 +140,27 @@ mod tests {
         // 16384 x 16384 x 42 bytes = 10.5 GiB exactly.
         assert_eq!(frame_bytes(16384, 16384, false), 11_274_289_152);
         assert_eq!(
-            check_against(16384, 16384, false, Some(4 << 30)).unwrap_err(),
+            check_against(16384, 16384, false, true, Some(4 << 30)).unwrap_err(),
             "a 16384x16384 frame needs 10.50 GiB (42 bytes a pixel) and only 4.00 GiB is available: \
              lower the resolution, or render it in parts (--tiles K/N)"
         );
-        assert!(check_against(16384, 16384, false, Some(11_274_289_152)).is_ok());
-        assert!(check_against(16384, 16384, false, None).is_ok());
-        assert!(check_against(1920, 1080, false, Some(1 << 30)).is_ok());
+        assert!(check_against(16384, 16384, false, true, Some(11_274_289_152)).is_ok());
+        assert!(check_against(16384, 16384, false, true, None).is_ok());
+        assert!(check_against(1920, 1080, false, true, Some(1 << 30)).is_ok());
         // Counting steps: 42 + 239 = 281 bytes a pixel; 4096 x 4096 of them is 4.39 GiB.
         assert_eq!(frame_bytes(4096, 4096, true), 4096 * 4096 * 281);
         assert_eq!(
-            check_against(4096, 4096, true, Some(4 << 30)).unwrap_err(),
+            check_against(4096, 4096, true, true, Some(4 << 30)).unwrap_err(),
             "a 4096x4096 frame needs 4.39 GiB (281 bytes a pixel, counting steps) and only 4.00 GiB is \
              available: lower the resolution, or leave out --counters and --heatmap"
         );
-        assert!(check_against(4096, 4096, false, Some(4 << 30)).is_ok());
+        assert!(check_against(4096, 4096, false, true, Some(4 << 30)).is_ok());
+        // A command that cannot render in parts (bench) is not told to.
+        assert_eq!(
+            check_against(16384, 16384, false, false, Some(4 << 30)).unwrap_err(),
+            "a 16384x16384 frame needs 10.50 GiB (42 bytes a pixel) and only 4.00 GiB is available: \
+             lower the resolution"
+        );
     }
 
     #[test]

@@ -758,3 +758,32 @@ fn counters_report_the_steps_per_ray_by_kind() {
         String::from_utf8(whitted(&["render", "--counters", "-o", out.to_str().unwrap()]).stderr).unwrap();
     assert!(err.contains("--stats"), "{err}");
 }
+
+/// `--stats=json --resume` on a part already whole renders nothing and says so in its report: the
+/// part's passes, no rays, no render time.
+#[test]
+fn render_stats_of_a_part_already_done_report_no_rays() {
+    let dir = tempfile::tempdir().unwrap();
+    let part = dir.path().join("p.partial");
+    let args = [
+        "render",
+        "--width",
+        "40",
+        "--passes",
+        "2",
+        "--tiles",
+        "0/2",
+        "-q",
+        "--resume",
+        "--stats=json",
+        "-o",
+        part.to_str().unwrap(),
+    ];
+    let first = json(&args);
+    assert_eq!(int(&first["passes"]), 2);
+    assert!(check_rays(&first, "rays")[0] > 0);
+    let again = json(&args);
+    assert_eq!(int(&again["passes"]), 2);
+    assert_eq!(int(&again["rays"]["total"]), 0, "{again}");
+    assert_eq!(again["render_s"].as_f64(), Some(0.0), "{again}");
+}

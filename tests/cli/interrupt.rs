@@ -1,6 +1,7 @@
-//! Ctrl-C during `whitted render`: what is finished is written, stderr says what and how to go on, the
-//! exit status is 130, and `--resume` with the same arguments finishes the very image an
-//! uninterrupted render makes.
+//! Ctrl-C, SIGTERM and SIGHUP during `whitted render`: what is finished is written, stderr says what
+//! and how to go on, the exit status is 128 + the signal's number, and `--resume` with the same
+//! arguments finishes the very image an uninterrupted render makes; the stop comes within a tile, and
+//! a second signal ends the process at once.
 #![cfg(target_os = "linux")]
 
 use std::path::Path;
@@ -45,6 +46,12 @@ fn catches_sigint(pid: u32) -> bool {
 /// clock ticks of CPU time rendering, sends it SIGINT, and returns how it ended. Work done, not time
 /// passed, decides when: the render has finished some tiles however loaded the machine is.
 fn interrupt_after(child: Child, ticks: u64) -> Output {
+    signal_after(&child, ticks, libc::SIGINT);
+    child.wait_with_output().unwrap()
+}
+
+/// As [`interrupt_after`], with `signal`, without waiting for the end.
+fn signal_after(child: &Child, ticks: u64, signal: libc::c_int) {
     let pid = child.id();
     let mut polls = 0;
     let mut poll = |what: &str| {
@@ -59,8 +66,7 @@ fn interrupt_after(child: Child, ticks: u64) -> Output {
     while cpu_ticks(pid) < start + ticks {
         poll("the render's CPU time");
     }
-    assert_eq!(unsafe { libc::kill(pid as libc::pid_t, libc::SIGINT) }, 0);
-    child.wait_with_output().unwrap()
+    assert_eq!(unsafe { libc::kill(pid as libc::pid_t, signal) }, 0);
 }
 
 /// Starts `whitted ARGS`, interrupts it after 10 clock ticks of rendering, and returns its stderr, after
@@ -90,15 +96,6 @@ fn number_between(text: &str, before: &str, after: &str) -> u32 {
         .find(after)
         .unwrap_or_else(|| panic!("no \"{after}\" in {text}"));
     text[start..start + len].parse().unwrap()
-}
-
-fn names(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
 }
 
 /// A one-pass render interrupted keeps its finished tiles in `OUT.partial` (even with `-q`, stderr
@@ -132,11 +129,15 @@ fn an_interrupted_render_keeps_its_tiles_and_resumes_into_the_same_image() {
              command with --resume renders the rest\n"
         )
     );
-    assert_eq!(names(dir.path()), ["one.png.partial"]);
+    assert_eq!(common::names(dir.path()), ["one.png.partial"]);
 
     let resumed = run(&[&args[..], &["--resume"]].concat());
     assert_eq!(resumed, "", "-q: nothing to say");
-    assert_eq!(names(dir.path()), ["one.png"], "the .partial file is spent");
+    assert_eq!(
+        common::names(dir.path()),
+        ["one.png"],
+        "the .partial file is spent"
+    );
     let whole = dir.path().join("whole.png").to_string_lossy().into_owned();
     run(&["render", "--width", "320", "--spp", "36", "-q", "-o", &whole]);
     assert!(
@@ -181,7 +182,7 @@ fn an_interrupted_progressive_render_writes_its_passes_and_resumes() {
         )
     );
     assert_eq!(
-        names(d),
+        common::names(d),
         ["c.png", "c.png.partial", "snaps"],
         "no temporary file left"
     );
@@ -204,7 +205,7 @@ fn an_interrupted_progressive_render_writes_its_passes_and_resumes() {
         )),
         "{resumed}"
     );
-    assert_eq!(names(d), ["c.png", "k.png", "snaps"]);
+    assert_eq!(common::names(d), ["c.png", "k.png", "snaps"]);
     run(&[
         "render", "--width", "64", "--spp", "1", "--passes", "1000", "-q", "-o", &reference,
     ]);
@@ -332,7 +333,7 @@ fn a_write_failing_mid_render_keeps_the_passes_finished() {
             taken.display()
         )
     );
-    for name in names(&snaps) {
+    for name in common::names(&snaps) {
         if std::fs::metadata(snaps.join(&name)).unwrap().is_dir() {
             std::fs::remove_dir(snaps.join(name)).unwrap();
         }
@@ -357,5 +358,224 @@ fn a_write_failing_mid_render_keeps_the_passes_finished() {
 
 /// The names in `dir`, none if it does not exist yet.
 fn names_or_none(dir: &Path) -> Vec<String> {
-    if dir.is_dir() { names(dir) } else { Vec::new() }
+    if dir.is_dir() {
+        common::names(dir)
+    } else {
+        Vec::new()
+    }
+}
+
+/// SIGTERM (a scheduler's time limit, `scancel`) and SIGHUP keep the finished passes as Ctrl-C does:
+/// the mean and the sums written, no temporary left, exit status 143 and 129, and `--resume` goes on
+/// into the uninterrupted render's bytes.
+#[test]
+fn sigterm_and_sighup_keep_the_finished_passes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("t.png").to_string_lossy().into_owned();
+    let args = [
+        "render",
+        "--width",
+        "64",
+        "--spp",
+        "1",
+        "--passes",
+        "300",
+        "--threads",
+        "1",
+        "-o",
+        &out,
+    ];
+    for (signal, status, name) in [(libc::SIGTERM, 143, "SIGTERM"), (libc::SIGHUP, 129, "SIGHUP")] {
+        let child = spawn(&args);
+        signal_after(&child, 10, signal);
+        let result = child.wait_with_output().unwrap();
+        let err = String::from_utf8(result.stderr).unwrap();
+        assert_eq!(result.status.code(), Some(status), "{err}");
+        let k = number_between(
+            &err,
+            &format!("whitted: interrupted by {name} after "),
+            " of 300 passes",
+        );
+        assert_eq!(
+            err,
+            format!(
+                "whitted: interrupted by {name} after {k} of 300 passes: wrote their mean to {out} and \
+                 their sums to {out}.partial; the same command with --resume renders the rest\n"
+            )
+        );
+        assert_eq!(
+            common::names(d),
+            ["t.png", "t.png.partial"],
+            "no temporary file left"
+        );
+        std::fs::remove_file(format!("{out}.partial")).unwrap();
+    }
+    let child = spawn(&args);
+    signal_after(&child, 10, libc::SIGTERM);
+    assert_eq!(child.wait_with_output().unwrap().status.code(), Some(143));
+    run(&[&args[..], &["--resume"]].concat());
+    assert!(
+        std::fs::read(&out).unwrap() == uninterrupted(d, 300),
+        "the resumed image differs from the uninterrupted one"
+    );
+    assert_eq!(common::names(d), ["r.png", "t.png"]);
+}
+
+/// Waits for `child`, returning its exit status and the CPU time it used in seconds (from `wait4`),
+/// with its stderr read on a thread.
+fn wait_with_cpu(mut child: Child) -> (i32, f64, String) {
+    let mut stderr = child.stderr.take().unwrap();
+    let reader = std::thread::spawn(move || {
+        let mut text = String::new();
+        std::io::Read::read_to_string(&mut stderr, &mut text).unwrap();
+        text
+    });
+    let mut status = 0;
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    let pid = child.id() as libc::pid_t;
+    assert_eq!(unsafe { libc::wait4(pid, &mut status, 0, &mut usage) }, pid);
+    let seconds = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    let cpu = seconds(usage.ru_utime) + seconds(usage.ru_stime);
+    (libc::WEXITSTATUS(status), cpu, reader.join().unwrap())
+}
+
+/// Ctrl-C stops within a tile: one 32 x 24 tile of 65,536 samples a pixel (tens of seconds of CPU on
+/// one thread) stops at the next block of 4 x 2 pixels, so the whole process uses a small part of the
+/// tile's CPU time (measured as work done, by `wait4`, not as time passed), and writes nothing.
+#[test]
+fn ctrl_c_stops_within_a_long_tile() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("l.png").to_string_lossy().into_owned();
+    for kernel in ["packet", "single", "stream"] {
+        let child = spawn(&[
+            "render",
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--spp",
+            "65536",
+            "--threads",
+            "1",
+            "--kernel",
+            kernel,
+            "-o",
+            &out,
+        ]);
+        signal_after(&child, 10, libc::SIGINT);
+        let (status, cpu, err) = wait_with_cpu(child);
+        assert_eq!(status, 130, "{err}");
+        assert_eq!(
+            err,
+            "whitted: interrupted before any tile was finished; nothing written\n"
+        );
+        assert!(
+            cpu < 5.0,
+            "{kernel}: {cpu} s of CPU: the stop waited for the tile"
+        );
+        assert_eq!(common::names(dir.path()), Vec::<String>::new());
+    }
+}
+
+/// A second Ctrl-C ends the process at once, while the first waits for the block being rendered
+/// (here a 4 x 2 image, one block, of 65,536 samples a pixel between two facing mirrors, 64 bounces
+/// each: seconds of CPU); nothing half-written is left.
+#[test]
+fn a_second_ctrl_c_ends_at_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = d.join("mirrors.p3f");
+    std::fs::write(
+        &scene,
+        "bclr 0 0 0\nv\nfrom 0 0 0\nat 0 0 -1\nup 0 1 0\nangle 5\nhither 0.01\nresolution 4 2\n\
+         l 0 0.5 0 1 1 1\nf 0.1 0.1 0.1 0.05 0.9 0.9 0.9 0.9 500 0 1\n\
+         pl 0 0 -1 1 0 -1 0 1 -1\npl 0 0 1 0 1 1 1 0 1\n",
+    )
+    .unwrap();
+    let out = d.join("m.png").to_string_lossy().into_owned();
+    let child = spawn(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--spp",
+        "65536",
+        "--max-depth",
+        "64",
+        "--threads",
+        "1",
+        "-o",
+        &out,
+    ]);
+    signal_after(&child, 10, libc::SIGINT);
+    std::thread::sleep(Duration::from_millis(100));
+    let state = stat_state(child.id());
+    assert!(
+        state.is_some_and(|s| s != 'Z'),
+        "the first Ctrl-C ended the render before a second could be sent: the block is too cheap"
+    );
+    assert_eq!(unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) }, 0);
+    let (status, cpu, err) = wait_with_cpu(child);
+    assert_eq!(status, 130, "{err}");
+    assert_eq!(
+        err,
+        "whitted: Ctrl-C again: stopped at once; nothing more is written\n"
+    );
+    assert!(
+        cpu < 1.0 + 0.2,
+        "{cpu} s of CPU: the second Ctrl-C waited for the block"
+    );
+    assert_eq!(common::names(d), ["mirrors.p3f"]);
+}
+
+/// The state letter of `/proc/PID/stat` (R, S, Z...), if the process is there.
+fn stat_state(pid: u32) -> Option<char> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    stat[stat.rfind(')')? + 2..].chars().next()
+}
+
+/// Interrupted, a `--heatmap` render gives advice that works: it cannot go on with its map, so the same
+/// command starts over, or `--resume` without `--heatmap` renders the rest without the map.
+#[test]
+fn an_interrupted_heatmap_render_advises_what_works() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("h.png").to_string_lossy().into_owned();
+    let args = [
+        "render",
+        "--width",
+        "64",
+        "--spp",
+        "1",
+        "--threads",
+        "1",
+        "-o",
+        &out,
+    ];
+    let heat = [&args[..], &["--passes", "300", "--heatmap", "nodes"]].concat();
+    let err = interrupted(&heat);
+    let k = number_between(&err, "whitted: interrupted after ", " of 300 passes");
+    assert_eq!(
+        err,
+        format!(
+            "whitted: interrupted after {k} of 300 passes: wrote their mean to {out} and their sums to \
+             {out}.partial; a --heatmap render cannot go on from them: the same command renders it again \
+             from the start, or, without --heatmap, with --resume renders the rest without the map\n"
+        )
+    );
+    run(&[&args[..], &["--passes", "300", "--resume", "-q"]].concat());
+    assert!(
+        std::fs::read(&out).unwrap() == uninterrupted(d, 300),
+        "the resumed image differs from the uninterrupted one"
+    );
+}
+
+/// The bytes of the default scene at 64 x 48, one sample a pass, `passes` passes, rendered in one go
+/// to `dir/r.png`.
+fn uninterrupted(dir: &Path, passes: u32) -> Vec<u8> {
+    let reference = dir.join("r.png").to_string_lossy().into_owned();
+    let passes = passes.to_string();
+    run(&[
+        "render", "--width", "64", "--spp", "1", "--passes", &passes, "-q", "-o", &reference,
+    ]);
+    std::fs::read(reference).unwrap()
 }

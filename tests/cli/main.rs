@@ -1,8 +1,8 @@
 //! The command line, run as a user runs it: refusals before any work (`cli_checks`), the reports of
 //! `info`, `bench` and `render --stats` parsed as a script reads them (`cli_report`), full and closed
 //! standard streams and a FIFO for a scene (`console`), every documented
-//! option by a value it must change or keep (`options`), Ctrl-C and `--resume` (`interrupt`), and
-//! split renders merged (`scale_out`).
+//! option by a value it must change or keep (`options`), Ctrl-C, SIGTERM and `--resume` (`interrupt`),
+//! what the commands do to the files around them (`files`), and split renders merged (`scale_out`).
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -10,6 +10,7 @@ mod common;
 mod cli_checks;
 mod cli_report;
 mod console;
+mod files;
 mod heatmap;
 mod interrupt;
 mod options;

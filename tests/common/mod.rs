@@ -55,6 +55,16 @@ pub fn whitted(args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
+/// The names in `dir`, sorted.
+pub fn names(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
 /// Every scene file (.p3f, .nff) under `dir`, sorted.
 pub fn scene_files(dir: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();

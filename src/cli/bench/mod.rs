@@ -10,6 +10,7 @@ mod timing;
 use std::time::Instant;
 
 use whitted::accel::{Accel, AccelKind, Prims};
+use whitted::render::memory;
 
 pub use args::BenchArgs;
 
@@ -26,6 +27,8 @@ pub fn run(args: &BenchArgs) -> Result<(), Failure> {
     args.camera.apply(&mut scene.camera).map_err(Failure::Usage)?;
     let loaded = start.elapsed();
     let options = plan::options(args, &scene).map_err(Failure::Usage)?;
+    // Checked before the structures are built: the frames are allocated after.
+    memory::check(options.width, options.height, options.count_steps, false).map_err(whitted::Error::msg)?;
     let pool = thread_pool(args.frame.threads)?;
     let build = |kind: AccelKind| {
         let start = Instant::now();

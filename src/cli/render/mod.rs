@@ -6,7 +6,6 @@ mod progress;
 mod resume;
 mod write;
 
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use whitted::accel::{Accel, Prims};
@@ -20,21 +19,18 @@ use progress::Progress;
 use resume::{done_already, joined, starting_point};
 use write::{check_outputs, write, write_heatmap, write_sums};
 
-use super::Failure;
 use super::console::note;
 use super::report::{Report, image_size};
 use super::setup::{load_scene, thread_pool, warn};
+use super::{Failure, signals};
 
 /// How a command that did not fail ended.
 pub enum Ended {
     /// It did all it was asked.
     Done,
-    /// Ctrl-C stopped it; what was finished is written.
+    /// A signal stopped it ([`signals`]); what was finished is written.
     Interrupted,
 }
-
-/// Set by Ctrl-C: the render stops at the next tile and writes what is finished.
-static STOP: AtomicBool = AtomicBool::new(false);
 
 /// Renders and writes the image, or, when Ctrl-C stops the render, what is finished.
 pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
@@ -48,7 +44,7 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
     let counted = plan.options.count_steps;
     if plan.tiles.is_none() || counted {
         let (w, h) = (plan.options.width, plan.options.height);
-        memory::check(w, h, counted).map_err(whitted::Error::msg)?;
+        memory::check(w, h, counted, true).map_err(whitted::Error::msg)?;
     }
     let pool = thread_pool(plan.threads)?;
     let loaded = start.elapsed();
@@ -68,9 +64,8 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
     warn(&plan.warnings);
     let renderer = Renderer::new(&scene, &accel, plan.options);
     warn(&renderer.warnings);
-    // Ctrl-C stops at the next tile; what was written stays whole (files are renamed into place).
-    // Installing fails only if another handler is set, as in tests that call `run` twice: keep it.
-    let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::Relaxed));
+    // Ctrl-C, SIGTERM or SIGHUP stops at the next block; what was written stays whole.
+    signals::handle(true);
 
     let render_start = Instant::now();
     let (acc, earlier) = starting_point(&plan, &scene);
@@ -80,6 +75,11 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
             note(format!(
                 "whitted: {output} holds this part already; not rendered again"
             ));
+        }
+        // The report of this run, which traced no rays.
+        if let Some(format) = args.report.stats {
+            let times = [loaded, built, Duration::ZERO];
+            stats(args, &plan, &accel, &acc, times, pool.current_num_threads()).print(format)?;
         }
         return Ok(Ended::Done);
     }
@@ -96,9 +96,9 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
     if let Some(kind) = plan.heatmap {
         write_heatmap(&plan, kind, &acc)?;
     }
-    if plan.resume && matches!(plan.target, Target::Image { .. }) {
+    if matches!(plan.target, Target::Image { .. }) {
         // The image is whole: the sums it was resumed from are spent, as is a stop file --resume
-        // ignored (the warning said why).
+        // ignored or a render without --resume started over from (a warning said so at the start).
         let _ = std::fs::remove_file(plan.stop_file());
     }
     let (times, threads) = ([loaded, built, rendered], pool.current_num_threads());
@@ -128,7 +128,7 @@ fn render_passes(
     let on_tile = || progress.tile();
     for pass in passes.start + acc.passes() + 1..=passes.end {
         progress.bar.set_message(label(plan, pass));
-        if let Err(stopped) = pool.install(|| acc.render_pass(renderer, pass, &on_tile, &STOP)) {
+        if let Err(stopped) = pool.install(|| acc.render_pass(renderer, pass, &on_tile, &signals::STOP)) {
             if acc.passes() == 0 {
                 acc = acc.keep_finished(&stopped);
             }
@@ -154,14 +154,20 @@ fn label(plan: &Plan, pass: u32) -> String {
     label.join(", ")
 }
 
-/// After Ctrl-C: writes what is finished and says on stderr, even with `--quiet`, what was written
+/// After a signal ([`signals`]): writes what is finished and says on stderr, even with `--quiet`, what was written
 /// and how to go on. The sums go to the stop file ([`Plan::stop_file`]) for `--resume`; an image render
 /// with whole passes also writes their mean as the image (and its snapshot).
 fn interrupted(plan: &Plan, settings: &PartSettings, acc: &Progressive) -> whitted::Result<Ended> {
     let passes = plan.passes();
     let (done, of) = (acc.passes(), passes.end - passes.start);
+    let by = match signals::received().map(signals::name) {
+        Some(name) if name != "Ctrl-C" => format!(" by {name}"),
+        _ => String::new(),
+    };
     if done == 0 {
-        note("whitted: interrupted before any tile was finished; nothing written");
+        note(format!(
+            "whitted: interrupted{by} before any tile was finished; nothing written"
+        ));
         return Ok(Ended::Interrupted);
     }
     let stop = plan.stop_file();
@@ -186,9 +192,14 @@ fn interrupted(plan: &Plan, settings: &PartSettings, acc: &Progressive) -> whitt
     } else {
         format!(" after {done} of {of} passes: wrote their sums to {stop}")
     };
-    note(format!(
-        "whitted: interrupted{what}; the same command with --resume renders the rest"
-    ));
+    // A heatmap counts the rays of one whole run, so a --heatmap render cannot go on from its sums.
+    let how = if plan.heatmap.is_some() {
+        "; a --heatmap render cannot go on from them: the same command renders it again from the start, \
+         or, without --heatmap, with --resume renders the rest without the map"
+    } else {
+        "; the same command with --resume renders the rest"
+    };
+    note(format!("whitted: interrupted{by}{what}{how}"));
     Ok(Ended::Interrupted)
 }
 
@@ -203,12 +214,20 @@ fn kept(plan: &Plan, settings: &PartSettings, acc: &Progressive, e: whitted::Err
     }
     whitted::Error {
         message: format!(
-            "{}; the {} passes finished are kept in {}: the same command with --resume goes on from them",
+            "{}; {} kept in {}: the same command with --resume goes on from them",
             e.message,
-            acc.passes(),
+            passes_finished(acc.passes()),
             stop.display()
         ),
         ..e
+    }
+}
+
+/// "the N passes finished are", in words that agree with N.
+fn passes_finished(n: u32) -> String {
+    match n {
+        1 => "the 1 pass finished is".into(),
+        n => format!("the {n} passes finished are"),
     }
 }
 
@@ -265,4 +284,13 @@ fn summary(plan: &Plan, [loaded, built, rendered]: [Duration; 3], threads: usize
         plan.options.kernel,
         plan.output.display()
     )
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn one_pass_is_one_pass() {
+        assert_eq!(super::passes_finished(1), "the 1 pass finished is");
+        assert_eq!(super::passes_finished(7), "the 7 passes finished are");
+    }
 }

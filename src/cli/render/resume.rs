@@ -7,7 +7,8 @@ use whitted::scene::Scene;
 use super::plan::{Plan, Target};
 use crate::cli::setup::warn;
 
-/// Where the render starts: at nothing, or with `--resume` at what the stop file holds of this very
+/// Where the render starts: at nothing (with a warning where a stop file is there without `--resume`),
+/// or with `--resume` at what the stop file holds of this very
 /// render (same settings, the first passes of this run over its tiles). A stop file that cannot be
 /// read, is damaged or is of another render is ignored with a warning that says why (it is replaced
 /// or, beside a finished image, removed, as one resumed from is). Returns the accumulator to render
@@ -16,7 +17,16 @@ use crate::cli::setup::warn;
 pub fn starting_point(plan: &Plan, scene: &Scene) -> (Progressive, Option<Progressive>) {
     let fresh = || (plan.accumulator(), None);
     let stop = plan.stop_file();
-    if !plan.resume || std::fs::symlink_metadata(&stop).is_err() {
+    let there = std::fs::symlink_metadata(&stop).is_ok();
+    if there && !plan.resume && matches!(plan.target, Target::Image { .. }) {
+        warn(&[format!(
+            "{} holds an interrupted render of {}: this render starts over without it (--resume goes \
+             on from it), and replaces it, or removes it once the image is whole",
+            stop.display(),
+            plan.output.display()
+        )]);
+    }
+    if !plan.resume || !there {
         return fresh();
     }
     let (passes, tiles) = (plan.passes(), plan.tile_indices());

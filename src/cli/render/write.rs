@@ -2,9 +2,10 @@
 
 use std::path::{Path, PathBuf};
 
+use whitted::files::{check_writable, write_atomically};
 use whitted::parts::partial::{Part, PartSettings};
 use whitted::render::cost::CostKind;
-use whitted::render::film::{Film, check_writable, write_atomically};
+use whitted::render::film::Film;
 use whitted::render::progressive::Progressive;
 use whitted::render::{Options, spd};
 
@@ -19,7 +20,15 @@ pub fn check_outputs(args: &RenderArgs) -> Result<(), Failure> {
     outputs::check(&args.output, partial)?;
     let stop = stop_file(&args.output, partial);
     if let Some(dir) = &args.progressive_out {
-        outputs::apart(dir, &args.output, &stop).map_err(Failure::Usage)?;
+        let heatmaps = heatmap_paths(&args.output);
+        let mut files = vec![
+            (args.output.as_path(), "the output image"),
+            (stop.as_path(), "the file an interrupted render keeps its sums in"),
+        ];
+        if args.report.heatmap.is_some() {
+            files.extend(heatmaps.iter().map(|p| (p.as_path(), "a file of the heatmap")));
+        }
+        outputs::apart(dir, &files).map_err(Failure::Usage)?;
     }
     if !partial {
         check_writable(&stop).map_err(|e| {
@@ -57,8 +66,10 @@ pub fn write_heatmap(plan: &Plan, kind: CostKind, acc: &Progressive) -> whitted:
     map.write_exr(&exr)?;
     let mut text = serde_json::to_string_pretty(&kind.summary(w, h, pixels)).expect("JSON of plain values");
     text.push('\n');
-    write_atomically(&json, |tmp| std::fs::write(tmp, &text).map_err(|e| e.to_string()))
-        .map_err(|e| whitted::Error::file(&json, e))
+    write_atomically(&json, |file| {
+        std::io::Write::write_all(file, text.as_bytes()).map_err(|e| e.to_string())
+    })
+    .map_err(|e| whitted::Error::file(&json, e))
 }
 
 /// Writes the sums or the mean so far to the output and, with `--progressive-out`, a numbered copy.

@@ -13,6 +13,8 @@
 //! accelerators' packet verbs answer each ray as their single-ray verbs do: the image is the
 //! single-ray path's, bit for bit.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use glam::{Vec2, Vec3};
 use wide::f32x8;
 
@@ -239,7 +241,8 @@ impl Renderer<'_> {
     /// Shades `tile` for pass `pass`, packet by packet (pixels outside the image are inactive lanes),
     /// into `buf`: sample `s` of eight pixels at a time, each lane with its pixel's own pattern and
     /// random numbers, summed per pixel in sample order as the single-ray path sums them; given
-    /// `pixels`, each pixel's rays are counted into its own (row by row, [`TILE`] a row).
+    /// `pixels`, each pixel's rays are counted into its own (row by row, [`TILE`] a row). Leaves the
+    /// tile half done once `stop` is set.
     pub(in crate::render) fn tile_packets(
         &self,
         tile: Tile,
@@ -247,6 +250,7 @@ impl Renderer<'_> {
         buf: &mut TilePixels,
         rays_traced: &mut RayCounts,
         mut pixels: Option<&mut [RayCounts]>,
+        stop: &AtomicBool,
     ) {
         let mut patterns: PerRay<PixelPattern> = Default::default();
         // Filled in place for each sample of each block (built here once: no copy of the eight).
@@ -255,6 +259,9 @@ impl Renderer<'_> {
             std::array::from_fn(|_| self.pixel_sample(pass, self.pixel_key(0, 0), 0, Vec2::ZERO));
         for y0 in (tile.y0..tile.y1).step_by(BLOCK_H as usize) {
             for x0 in (tile.x0..tile.x1).step_by(BLOCK_W as usize) {
+                if stop.load(Ordering::Relaxed) {
+                    return;
+                }
                 let pixel = |k: usize| (x0 + k as u32 % BLOCK_W, y0 + k as u32 / BLOCK_W);
                 let mut active = 0u8;
                 for (k, pattern) in patterns.iter_mut().enumerate() {

@@ -2,6 +2,8 @@
 //! integrator ([`Whitted::trace`](super::super::whitted::Whitted::trace)), which recurses into its
 //! shadow, reflected and refracted rays.
 
+use std::sync::atomic::{AtomicBool, Ordering};
+
 use glam::Vec3;
 
 use super::TilePixels;
@@ -12,7 +14,8 @@ use crate::render::whitted::{RayCounts, RayKind, take_steps};
 
 impl Renderer<'_> {
     /// Shades `tile` for pass `pass` pixel by pixel into `buf`, counting the rays into `rays` and,
-    /// given `pixels`, each pixel's into its own (row by row, [`TILE`] a row).
+    /// given `pixels`, each pixel's into its own (row by row, [`TILE`] a row); leaves the tile half
+    /// done once `stop` is set.
     pub(in crate::render) fn tile_single(
         &self,
         tile: Tile,
@@ -20,10 +23,14 @@ impl Renderer<'_> {
         buf: &mut TilePixels,
         rays: &mut RayCounts,
         mut pixels: Option<&mut [RayCounts]>,
+        stop: &AtomicBool,
     ) {
         let mut pattern = PixelPattern::default();
         for y in tile.y0..tile.y1 {
             for x in tile.x0..tile.x1 {
+                if stop.load(Ordering::Relaxed) {
+                    return;
+                }
                 let i = ((y - tile.y0) * TILE + (x - tile.x0)) as usize;
                 // A counting render keeps each pixel's rays apart; the others count into the tile's.
                 buf[i] = match pixels.as_deref_mut() {

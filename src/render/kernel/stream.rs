@@ -19,6 +19,7 @@
 //! [`Whitted::add_bounces`]: crate::render::whitted::Whitted::add_bounces
 
 use std::cell::RefCell;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::Vec3;
 
@@ -129,7 +130,8 @@ impl StreamBuffers {
 impl Renderer<'_> {
     /// Renders `tiles` for pass `pass` as streams into `bufs` (one per tile) and counts each tile's
     /// rays into `counts` and, unless `pixel_rays` is empty, each pixel's into its own (tile by tile,
-    /// [`TILE`] x [`TILE`] each), with the calling worker's buffers, kept from job to job.
+    /// [`TILE`] x [`TILE`] each), with the calling worker's buffers, kept from job to job; leaves
+    /// them half done once `stop` is set.
     pub(in crate::render) fn tiles_streamed(
         &self,
         tiles: &[Tile],
@@ -137,11 +139,12 @@ impl Renderer<'_> {
         bufs: &mut [TilePixels],
         counts: &mut [RayCounts],
         pixel_rays: &mut [RayCounts],
+        stop: &AtomicBool,
     ) {
         thread_local! {
             static BUFFERS: RefCell<StreamBuffers> = RefCell::default();
         }
-        BUFFERS.with_borrow_mut(|b| self.trace_tiles(tiles, pass, bufs, counts, pixel_rays, b));
+        BUFFERS.with_borrow_mut(|b| self.trace_tiles(tiles, pass, (bufs, counts, pixel_rays), b, stop));
     }
 
     /// [`Renderer::tiles_streamed`] with the buffers `b`.
@@ -149,10 +152,9 @@ impl Renderer<'_> {
         &self,
         tiles: &[Tile],
         pass: u32,
-        bufs: &mut [TilePixels],
-        counts: &mut [RayCounts],
-        pixel_rays: &mut [RayCounts],
+        (bufs, counts, pixel_rays): (&mut [TilePixels], &mut [RayCounts], &mut [RayCounts]),
         b: &mut StreamBuffers,
+        stop: &AtomicBool,
     ) {
         let samples = self.samples() as usize;
         // Pixels tile by tile, in blocks of 4x2 within a tile (eight neighbours, so that eight
@@ -174,6 +176,9 @@ impl Renderer<'_> {
         let mut pattern = PixelPattern::default();
         let mut walks = Vec::with_capacity(per_batch * samples);
         for batch in pixels.chunks(per_batch) {
+            if stop.load(Ordering::Relaxed) {
+                return;
+            }
             walks.clear();
             b.nodes.clear();
             b.free.clear();
