@@ -25,9 +25,9 @@ pub struct Tok {
     start: usize,
     len: usize,
     /// 1-based line of the token's first byte.
-    pub line: u32,
+    pub line: u64,
     /// 1-based column (in bytes) of the token's first byte.
-    pub col: u32,
+    pub col: u64,
 }
 
 /// The streaming tokenizer. `#` starts a comment to the end of the line.
@@ -41,7 +41,7 @@ pub struct Lexer {
     eof: bool,
     /// Absolute offset of `buf[0]` in the decompressed stream.
     consumed: u64,
-    line: u32,
+    line: u64,
     /// Absolute offset of the first byte of the current line.
     line_start: u64,
     peeked: Option<Tok>,
@@ -158,9 +158,9 @@ impl Lexer {
     }
 
     /// Line and column of the read position.
-    pub fn position(&self) -> (u32, u32) {
+    pub fn position(&self) -> (u64, u64) {
         let abs = self.consumed + self.pos as u64;
-        (self.line, (abs - self.line_start + 1) as u32)
+        (self.line, abs - self.line_start + 1)
     }
 
     /// The next token, or `None` at the end of the data.
@@ -419,7 +419,7 @@ mod tests {
         Lexer::new(Path::new("t.txt"), Box::new(text.as_bytes()))
     }
 
-    fn words(mut lx: Lexer) -> Vec<(String, u32, u32)> {
+    fn words(mut lx: Lexer) -> Vec<(String, u64, u64)> {
         let mut out = vec![];
         while let Some(t) = lx.next_token().unwrap() {
             out.push((String::from_utf8_lossy(lx.text(&t)).into_owned(), t.line, t.col));
@@ -453,6 +453,26 @@ mod tests {
         }
         // A line break follows every multiple of 7 up to 39,998: 5,715 of them.
         assert_eq!(got.last().unwrap().1, 39_999 / 7 + 2);
+    }
+
+    /// Lines and columns go on counting past 2^32 (a file of more than 4 billion lines, a line of more
+    /// than 4 GiB), through the tokenizer and `skip_line` alike, into the error's location.
+    #[test]
+    fn positions_past_four_billion() {
+        let mut lx = lexer("a x y\nb\n\nc d");
+        lx.line = u32::MAX.into();
+        let a = lx.next_token().unwrap().unwrap();
+        lx.skip_line().unwrap();
+        let b = lx.next_token().unwrap().unwrap();
+        let c = lx.next_token().unwrap().unwrap();
+        assert_eq!([a.line, b.line, c.line], [(1 << 32) - 1, 1 << 32, (1 << 32) + 2]);
+        let e = lx.error_at(&c, "x");
+        assert_eq!(e.to_string(), "t.txt:4294967298:1: x");
+        // The data so far taken for 5 GiB of one line.
+        let mut lx = lexer("a b");
+        lx.consumed = 5 << 30;
+        let b = [lx.next_token().unwrap(), lx.next_token().unwrap()][1].unwrap();
+        assert_eq!(b.col, (5 << 30) + 3);
     }
 
     #[test]

@@ -79,7 +79,7 @@ fn check_room(lx: &Lexer, tok: &Tok, len: usize) -> Result<()> {
 }
 
 /// The next token if it is on `line`: a statement ends with its line.
-fn next_on(lx: &mut Lexer, line: u32) -> Result<Option<Tok>> {
+fn next_on(lx: &mut Lexer, line: u64) -> Result<Option<Tok>> {
     match lx.peek()? {
         Some(tok) if tok.line == line => lx.next_token(),
         _ => Ok(None),

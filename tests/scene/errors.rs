@@ -19,7 +19,7 @@ fn parse(text: &str) -> Result<whitted::scene::Scene, Error> {
 }
 
 /// Parses `text`, expects an error on `line` whose message contains `needle`.
-fn fails(text: &str, line: u32, needle: &str) -> Error {
+fn fails(text: &str, line: u64, needle: &str) -> Error {
     let e = parse(text).expect_err("should not parse");
     assert!(
         e.message.contains(needle),

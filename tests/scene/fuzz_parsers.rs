@@ -90,7 +90,7 @@ fn blank(bytes: &[u8]) -> bool {
 }
 
 fn check_scene(bytes: Vec<u8>) {
-    let lines = bytes.iter().filter(|&&b| b == b'\n').count() as u32 + 1;
+    let lines = bytes.iter().filter(|&&b| b == b'\n').count() as u64 + 1;
     let blank = blank(&bytes);
     match p3f::parse(Path::new("fuzz.p3f"), Box::new(std::io::Cursor::new(bytes))) {
         Ok(scene) => assert!(scene.camera.validate().is_ok()),
