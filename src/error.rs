@@ -11,7 +11,7 @@ pub enum Location {
     /// The whole file (it could not be opened, or it is empty).
     File,
     /// A 1-based line and column of a text file.
-    LineCol(u32, u32),
+    LineCol(u64, u64),
     /// A byte offset into the (decompressed) data of a binary file.
     Byte(u64),
 }
@@ -47,7 +47,7 @@ impl Error {
     }
 
     /// An error at a line and column of a text file.
-    pub fn at(path: &Path, line: u32, col: u32, message: impl Into<String>) -> Self {
+    pub fn at(path: &Path, line: u64, col: u64, message: impl Into<String>) -> Self {
         Error {
             path: Some(path.to_path_buf()),
             location: Location::LineCol(line, col),
@@ -56,7 +56,7 @@ impl Error {
     }
 
     /// The line of a text-file error, if it has one (tests assert on it).
-    pub fn line(&self) -> Option<u32> {
+    pub fn line(&self) -> Option<u64> {
         match self.location {
             Location::LineCol(line, _) => Some(line),
             _ => None,

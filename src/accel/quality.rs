@@ -5,7 +5,7 @@
 //! SAH alone a poor predictor of traversal cost and SAH with EPO a good one, so a tree optimizer is
 //! judged by both.
 
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use super::bvh2::{Bvh2, INTERSECTION_COST, TRAVERSAL_COST};
@@ -52,7 +52,7 @@ impl TreeView {
     /// The EPO cost: Σ over nodes of its cost (a traversal step for an inner node, a test per
     /// primitive for a leaf, as in SAH) × the area of the triangles outside its subtree within its box,
     /// over the area of all triangles (Aila et al. 2013, eq. 4). Other primitives are not counted. 0
-    /// without triangles.
+    /// without triangles. The view must be a tree: every node but the root the child of one node.
     pub fn epo(&self, prims: &Prims) -> f64 {
         let t = &prims.scene.triangles;
         let area = |id: u32| match prims.kind(id) {
@@ -66,6 +66,7 @@ impl TreeView {
         if total <= 0.0 || self.nodes.is_empty() {
             return 0.0;
         }
+        let subtrees = Subtrees::new(self, prims);
         let overlap: f64 = (0..self.nodes.len())
             .into_par_iter()
             .map(|i| {
@@ -75,21 +76,30 @@ impl TreeView {
                 } else {
                     f64::from(TRAVERSAL_COST)
                 };
-                cost * self.foreign_area(i, prims)
+                cost * self.foreign_area(i, prims, &subtrees)
             })
             .sum();
         overlap / total
     }
 
     /// The area of the triangles outside node `i`'s subtree that lies inside its box: the tree is
-    /// walked from the root into the boxes that overlap it, leaving out `i` itself.
-    fn foreign_area(&self, i: usize, prims: &Prims) -> f64 {
+    /// walked from the root into the boxes that overlap it, leaving out `i` itself. A subtree that is
+    /// not on the way to `i` and whose triangles lie wholly in the box adds its area without being
+    /// walked, as clipping would leave each of its triangles whole: without that, n copies of one
+    /// triangle (every box the same) cost n² clippings.
+    fn foreign_area(&self, i: usize, prims: &Prims, subtrees: &Subtrees) -> f64 {
         let bounds = self.nodes[i].bounds;
+        let order = subtrees.order[i];
         let mut sum = 0.0;
         let mut stack = vec![0usize];
         while let Some(j) = stack.pop() {
             let m = &self.nodes[j];
             if j == i || !overlap(&m.bounds, &bounds) {
+                continue;
+            }
+            let holds_i = subtrees.order[j] < order && order < subtrees.end[j];
+            if !holds_i && within(&subtrees.bounds[j], &bounds) {
+                sum += subtrees.area[j];
                 continue;
             }
             stack.extend(m.children.iter().map(|&c| c as usize));
@@ -100,6 +110,54 @@ impl TreeView {
             }
         }
         sum
+    }
+}
+
+/// What [`TreeView::foreign_area`] needs of every node's subtree: where it lies in a depth-first order
+/// of the tree (a node's descendants are `order[i] + 1..end[i]`), and the bounds and total area
+/// (as [`clipped_area`] measures a triangle it leaves whole) of its triangles.
+struct Subtrees {
+    order: Vec<u32>,
+    end: Vec<u32>,
+    bounds: Vec<Aabb>,
+    area: Vec<f64>,
+}
+
+impl Subtrees {
+    fn new(view: &TreeView, prims: &Prims) -> Self {
+        let n = view.nodes.len();
+        let mut s = Subtrees {
+            order: vec![0; n],
+            end: vec![0; n],
+            bounds: vec![Aabb::EMPTY; n],
+            area: vec![0.0; n],
+        };
+        let mut next = 0u32;
+        // Each node is pushed to be entered, then again (`true`) to be finished after its children.
+        let mut stack = vec![(0usize, false)];
+        while let Some((i, finished)) = stack.pop() {
+            let node = &view.nodes[i];
+            if !finished {
+                s.order[i] = next;
+                next += 1;
+                stack.push((i, true));
+                stack.extend(node.children.iter().map(|&c| (c as usize, false)));
+                continue;
+            }
+            s.end[i] = next;
+            for &id in &node.prims {
+                if let PrimKind::Triangle(t) = prims.kind(id) {
+                    let v = prims.scene.triangles.vertices(t);
+                    v.iter().for_each(|&p| s.bounds[i].grow(p));
+                    s.area[i] += polygon_area(&v.map(|p| p.as_dvec3()));
+                }
+            }
+            for &c in &node.children {
+                s.bounds[i] = s.bounds[i].union(s.bounds[c as usize]);
+                s.area[i] += s.area[c as usize];
+            }
+        }
+        s
     }
 }
 
@@ -169,16 +227,21 @@ fn overlap(a: &Aabb, b: &Aabb) -> bool {
     a.min.cmple(b.max).all() && b.min.cmple(a.max).all()
 }
 
+/// Whether `inner` lies in `outer`, faces included (the empty box lies in every box).
+fn within(inner: &Aabb, outer: &Aabb) -> bool {
+    inner.min.cmpge(outer.min).all() && inner.max.cmple(outer.max).all()
+}
+
 /// The area of triangle `v` within `bounds` (Sutherland and Hodgman 1974: clipped by each of the box's
 /// six planes in turn), in f64.
 pub fn clipped_area(v: [Vec3; 3], bounds: &Aabb) -> f64 {
-    let mut poly: Vec<[f64; 3]> = v.iter().map(|p| p.as_dvec3().to_array()).collect();
+    let mut poly: Vec<DVec3> = v.iter().map(|p| p.as_dvec3()).collect();
     for axis in 0..3 {
         for (limit, keep_below) in [
             (f64::from(bounds.max[axis]), true),
             (f64::from(bounds.min[axis]), false),
         ] {
-            let inside = |p: &[f64; 3]| {
+            let inside = |p: &DVec3| {
                 if keep_below {
                     p[axis] <= limit
                 } else {
@@ -193,7 +256,7 @@ pub fn clipped_area(v: [Vec3; 3], bounds: &Aabb) -> f64 {
                 }
                 if inside(&a) != inside(&b) {
                     let s = (limit - a[axis]) / (b[axis] - a[axis]);
-                    out.push(std::array::from_fn(|c| a[c] + s * (b[c] - a[c])));
+                    out.push(a + s * (b - a));
                 }
             }
             poly = out;
@@ -202,11 +265,15 @@ pub fn clipped_area(v: [Vec3; 3], bounds: &Aabb) -> f64 {
             }
         }
     }
-    // Half the length of the sum of the fan's cross products.
-    let p0 = glam::DVec3::from(poly[0]);
-    let mut n = glam::DVec3::ZERO;
+    polygon_area(&poly)
+}
+
+/// The area of a planar convex polygon: half the length of the sum of its fan's cross products.
+fn polygon_area(poly: &[DVec3]) -> f64 {
+    let p0 = poly[0];
+    let mut n = DVec3::ZERO;
     for k in 1..poly.len() - 1 {
-        n += (glam::DVec3::from(poly[k]) - p0).cross(glam::DVec3::from(poly[k + 1]) - p0);
+        n += (poly[k] - p0).cross(poly[k + 1] - p0);
     }
     n.length() / 2.0
 }
@@ -282,6 +349,116 @@ mod tests {
         let want = f64::from(INTERSECTION_COST) * (1.5 + 0.5) / 4.0;
         assert!((view.epo(&prims) - want).abs() < 1e-9, "{}", view.epo(&prims));
         assert_eq!(view.leaf_depths(), [0, 2]);
+    }
+
+    /// EPO straight from its definition (Aila et al. 2013, eq. 4), sharing nothing with
+    /// [`TreeView::epo`] but the clipping: for every node, every triangle that is not in its subtree
+    /// clipped to its box.
+    fn brute_force_epo(view: &TreeView, prims: &Prims) -> f64 {
+        let t = &prims.scene.triangles;
+        let triangle = |id: u32| match prims.kind(id) {
+            PrimKind::Triangle(i) => Some(t.vertices(i)),
+            _ => None,
+        };
+        let all: Vec<u32> = view.nodes.iter().flat_map(|n| n.prims.iter().copied()).collect();
+        let total: f64 = all
+            .iter()
+            .filter_map(|&id| triangle(id))
+            .map(|[a, b, c]| f64::from((b - a).cross(c - a).length()) / 2.0)
+            .sum();
+        let mut overlap = 0.0;
+        for node in &view.nodes {
+            let mut inside = std::collections::HashSet::new();
+            let mut stack = vec![node];
+            while let Some(n) = stack.pop() {
+                inside.extend(n.prims.iter().copied());
+                stack.extend(n.children.iter().map(|&c| &view.nodes[c as usize]));
+            }
+            let foreign: f64 = all
+                .iter()
+                .filter(|id| !inside.contains(id))
+                .filter_map(|&id| triangle(id))
+                .map(|v| clipped_area(v, &node.bounds))
+                .sum();
+            let cost = if node.children.is_empty() {
+                f64::from(INTERSECTION_COST) * node.prims.len() as f64
+            } else {
+                f64::from(TRAVERSAL_COST)
+            };
+            overlap += cost * foreign;
+        }
+        overlap / total
+    }
+
+    /// Overlapping, nested and identical triangles and spheres, in every structure: the EPO agrees
+    /// with its definition.
+    #[test]
+    fn epo_is_its_definition() {
+        let mut scene = Scene::new(Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 45.0, 8, 8));
+        let m = scene.add_material(Material::default());
+        for k in 0..400 {
+            let o = Vec3::new((k % 13) as f32 * 0.6, (k / 13) as f32 * 0.4, (k % 7) as f32 * 0.3);
+            match k % 5 {
+                0 => scene.add_sphere(o, 0.3, m),
+                // Large triangles across many others' boxes.
+                1 => scene.add_triangle(o, o + Vec3::new(4.0, 0.5, 1.0), o + Vec3::new(0.5, 3.0, -1.0), m),
+                // Copies of one triangle, and small ones inside the large ones' boxes.
+                2 => scene.add_triangle(Vec3::ZERO, Vec3::new(1.0, 0.2, 0.3), Vec3::new(0.1, 1.0, 0.7), m),
+                _ => scene.add_triangle(o, o + Vec3::new(0.5, 0.1, 0.0), o + Vec3::new(0.0, 0.4, 0.2), m),
+            }
+        }
+        let prims = Prims::new(&scene);
+        let bvh2 = crate::accel::bvh2::Bvh2::new(prims, crate::accel::bvh2::Builder::Sah { bins: 12 });
+        let bvh4 = crate::accel::wide::Bvh4::new(prims, 12).unwrap();
+        let bvh8 = crate::accel::wide::Bvh8::new(prims, 12).unwrap();
+        for (name, view) in [
+            ("bvh2", TreeView::from(&bvh2)),
+            ("bvh4", TreeView::from(&bvh4)),
+            ("bvh8", TreeView::from(&bvh8)),
+        ] {
+            let (got, want) = (view.epo(&prims), brute_force_epo(&view, &prims));
+            assert!(want > 1.0, "{name}: {want}");
+            assert!((got - want).abs() <= 1e-9 * want, "{name}: {got} against {want}");
+        }
+    }
+
+    /// 100,000 copies of one triangle: every box is the triangle's, so each node's box holds the whole
+    /// of every triangle outside its subtree, and the EPO is Σ cost × (n − the node's triangles) / n.
+    #[test]
+    fn identical_triangles() {
+        const N: usize = 100_000;
+        let mut scene = Scene::new(Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 45.0, 8, 8));
+        let m = scene.add_material(Material::default());
+        for _ in 0..N {
+            scene.add_triangle(Vec3::ZERO, Vec3::new(1.0, 0.2, 0.3), Vec3::new(0.1, 1.0, 0.7), m);
+        }
+        let prims = Prims::new(&scene);
+        let bvh = crate::accel::bvh2::Bvh2::new(prims, crate::accel::bvh2::Builder::Sah { bins: 12 });
+        let view = TreeView::from(&bvh);
+        // Triangles under each node, children after parents in the BVH2's array.
+        let mut under: Vec<usize> = view.nodes.iter().map(|n| n.prims.len()).collect();
+        for i in (0..view.nodes.len()).rev() {
+            for &c in &view.nodes[i].children {
+                assert!(c as usize > i);
+                under[i] += under[c as usize];
+            }
+        }
+        assert_eq!(under[0], N);
+        let want: f64 = view
+            .nodes
+            .iter()
+            .zip(&under)
+            .map(|(n, &s)| {
+                let cost = if n.children.is_empty() {
+                    f64::from(INTERSECTION_COST) * n.prims.len() as f64
+                } else {
+                    f64::from(TRAVERSAL_COST)
+                };
+                cost * (N - s) as f64 / N as f64
+            })
+            .sum();
+        let got = view.epo(&prims);
+        assert!((got - want).abs() <= 1e-6 * want, "{got} against {want}");
     }
 
     /// Triangles far apart in a real tree: no box holds another's surface.

@@ -2,7 +2,8 @@
 //!
 //! It reads through a fixed buffer, so a 30 MB mesh never becomes a 30 MB `String`, let alone a token
 //! vector per line; gzip is recognised by its magic bytes, not by the file name. Every token carries its
-//! line and column so that every error can say `path:line:col`.
+//! line and column so that every error can say `path:line:col`. A UTF-8 byte-order mark at the start of
+//! the text (of the data within a gzip), which some Windows editors write, is skipped.
 
 use std::fmt;
 use std::fs::File;
@@ -18,6 +19,8 @@ use crate::error::{Error, Result};
 const BUFFER_SIZE: usize = 1 << 16;
 /// No token of any of our formats is this long; binary garbage usually is.
 const MAX_TOKEN: usize = 1024;
+/// The UTF-8 encoding of U+FEFF, the byte-order mark.
+const BOM: &[u8] = b"\xef\xbb\xbf";
 
 /// One token: a run of bytes between whitespace, valid until the next call that advances the lexer.
 #[derive(Clone, Copy, Debug)]
@@ -25,9 +28,9 @@ pub struct Tok {
     start: usize,
     len: usize,
     /// 1-based line of the token's first byte.
-    pub line: u32,
+    pub line: u64,
     /// 1-based column (in bytes) of the token's first byte.
-    pub col: u32,
+    pub col: u64,
 }
 
 /// The streaming tokenizer. `#` starts a comment to the end of the line.
@@ -39,9 +42,11 @@ pub struct Lexer {
     pos: usize,
     end: usize,
     eof: bool,
+    /// Whether the first read (and the byte-order mark check) is done.
+    started: bool,
     /// Absolute offset of `buf[0]` in the decompressed stream.
     consumed: u64,
-    line: u32,
+    line: u64,
     /// Absolute offset of the first byte of the current line.
     line_start: u64,
     peeked: Option<Tok>,
@@ -111,6 +116,7 @@ impl Lexer {
             pos: 0,
             end: 0,
             eof: false,
+            started: false,
             consumed: 0,
             line: 1,
             line_start: 0,
@@ -129,10 +135,32 @@ impl Lexer {
         if self.eof {
             return Ok(false);
         }
+        if !self.started {
+            return self.start();
+        }
         self.buf.copy_within(keep..self.end, 0);
         self.consumed += keep as u64;
         self.pos -= keep;
         self.end -= keep;
+        self.read_more()
+    }
+
+    /// The first read, past a byte-order mark: it is not part of the first word, and the first column
+    /// is the one after it. Returns false if the data ends first.
+    fn start(&mut self) -> Result<bool> {
+        debug_assert!(self.end == 0, "the first read");
+        self.started = true;
+        // A read may stop within the mark.
+        while self.end < BOM.len() && self.read_more()? {}
+        if self.buf[..self.end].starts_with(BOM) {
+            self.pos = BOM.len();
+            self.line_start = BOM.len() as u64;
+        }
+        Ok(self.pos < self.end || self.refill(self.pos)?)
+    }
+
+    /// Reads more data after `end`. Returns false at the end of the data.
+    fn read_more(&mut self) -> Result<bool> {
         loop {
             match self.reader.read(&mut self.buf[self.end..]) {
                 Ok(0) => {
@@ -158,9 +186,9 @@ impl Lexer {
     }
 
     /// Line and column of the read position.
-    pub fn position(&self) -> (u32, u32) {
+    pub fn position(&self) -> (u64, u64) {
         let abs = self.consumed + self.pos as u64;
-        (self.line, (abs - self.line_start + 1) as u32)
+        (self.line, abs - self.line_start + 1)
     }
 
     /// The next token, or `None` at the end of the data.
@@ -419,7 +447,7 @@ mod tests {
         Lexer::new(Path::new("t.txt"), Box::new(text.as_bytes()))
     }
 
-    fn words(mut lx: Lexer) -> Vec<(String, u32, u32)> {
+    fn words(mut lx: Lexer) -> Vec<(String, u64, u64)> {
         let mut out = vec![];
         while let Some(t) = lx.next_token().unwrap() {
             out.push((String::from_utf8_lossy(lx.text(&t)).into_owned(), t.line, t.col));
@@ -453,6 +481,64 @@ mod tests {
         }
         // A line break follows every multiple of 7 up to 39,998: 5,715 of them.
         assert_eq!(got.last().unwrap().1, 39_999 / 7 + 2);
+    }
+
+    /// Lines and columns go on counting past 2^32 (a file of more than 4 billion lines, a line of more
+    /// than 4 GiB), through the tokenizer and `skip_line` alike, into the error's location.
+    #[test]
+    fn positions_past_four_billion() {
+        let mut lx = lexer("a x y\nb\n\nc d");
+        lx.line = u32::MAX.into();
+        let a = lx.next_token().unwrap().unwrap();
+        lx.skip_line().unwrap();
+        let b = lx.next_token().unwrap().unwrap();
+        let c = lx.next_token().unwrap().unwrap();
+        assert_eq!([a.line, b.line, c.line], [(1 << 32) - 1, 1 << 32, (1 << 32) + 2]);
+        let e = lx.error_at(&c, "x");
+        assert_eq!(e.to_string(), "t.txt:4294967298:1: x");
+        // The data so far taken for 5 GiB of one line.
+        let mut lx = lexer("a b");
+        lx.consumed = 5 << 30;
+        let b = [lx.next_token().unwrap(), lx.next_token().unwrap()][1].unwrap();
+        assert_eq!(b.col, (5 << 30) + 3);
+    }
+
+    /// A reader that hands out one byte at a time, as a pipe or a decompressor may.
+    struct Trickle(&'static [u8]);
+
+    impl Read for Trickle {
+        fn read(&mut self, out: &mut [u8]) -> io::Result<usize> {
+            let n = self.0.len().min(out.len()).min(1);
+            out[..n].copy_from_slice(&self.0[..n]);
+            self.0 = &self.0[n..];
+            Ok(n)
+        }
+    }
+
+    /// A byte-order mark at the start is skipped, whole or read in pieces, and the first column is
+    /// the one after it; elsewhere it is part of a word.
+    #[test]
+    fn a_leading_byte_order_mark_is_skipped() {
+        let text = "\u{feff}ply x\n\u{feff}y";
+        let want = vec![
+            ("ply".to_string(), 1, 1),
+            ("x".to_string(), 1, 5),
+            ("\u{feff}y".to_string(), 2, 1),
+        ];
+        assert_eq!(words(lexer(text)), want);
+        let trickle = Lexer::new(Path::new("t.txt"), Box::new(Trickle(text.as_bytes())));
+        assert_eq!(words(trickle), want);
+        for text in ["\u{feff}", "\u{feff} \n # nothing", "\u{feff}\n\n"] {
+            assert!(words(lexer(text)).is_empty(), "{text:?}");
+        }
+        // Only the whole mark: a text that starts with part of one keeps it.
+        let got = words(Lexer::new(Path::new("t.txt"), Box::new(&b"\xef\xbba"[..])));
+        assert_eq!(got, [("\u{fffd}a".to_string(), 1, 1)]);
+        // The binary data after a PLY header is counted from the file's first byte, the mark's.
+        let mut lx = lexer("\u{feff}ply\n");
+        lx.next_token().unwrap();
+        lx.skip_line().unwrap();
+        assert_eq!(lx.offset(), 7);
     }
 
     #[test]

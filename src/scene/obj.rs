@@ -79,7 +79,7 @@ fn check_room(lx: &Lexer, tok: &Tok, len: usize) -> Result<()> {
 }
 
 /// The next token if it is on `line`: a statement ends with its line.
-fn next_on(lx: &mut Lexer, line: u32) -> Result<Option<Tok>> {
+fn next_on(lx: &mut Lexer, line: u64) -> Result<Option<Tok>> {
     match lx.peek()? {
         Some(tok) if tok.line == line => lx.next_token(),
         _ => Ok(None),
@@ -171,10 +171,12 @@ fn vertex_ref(lx: &Lexer, tok: &Tok, mesh: &MeshData) -> Result<(u32, Option<u32
     };
     let position = resolve(index, mesh.positions.len()).ok_or_else(|| {
         let n = mesh.positions.len();
-        lx.error_at(
-            tok,
-            format!("expected a vertex index between 1 and {n} (or -{n}..-1), found {index}"),
-        )
+        let message = if n == 0 {
+            format!("expected a \"v\" line before vertex index {index}, found none")
+        } else {
+            format!("expected a vertex index between 1 and {n} (or -{n}..-1), found {index}")
+        };
+        lx.error_at(tok, message)
     })?;
     let normal = match normal {
         None => None,

@@ -9,7 +9,7 @@ use glam::Vec3;
 
 use super::lex::{self, Lexer, Tok, show};
 use super::polygon::triangulate;
-use super::store::{AccelHint, Camera, Material, MaterialId, Scene, check_resolution};
+use super::store::{AccelHint, Camera, MAX_LIGHT_SAMPLES, Material, MaterialId, Scene, check_resolution};
 use super::{MeshData, load_mesh};
 use crate::error::{Error, Location, Result};
 
@@ -33,6 +33,7 @@ pub fn parse(path: &Path, reader: Box<dyn Read + Send>) -> Result<Scene> {
         scene: Scene::new(Camera::new(Vec3::Z, Vec3::ZERO, Vec3::Y, 45.0, 1, 1)),
         material: None,
         camera_seen: false,
+        light_samples: 0,
         points: Vec::new(),
         normals: Vec::new(),
         tris: Vec::new(),
@@ -84,6 +85,8 @@ struct Parser {
     scene: Scene,
     material: Option<MaterialId>,
     camera_seen: bool,
+    /// The light samples so far, bounded by [`MAX_LIGHT_SAMPLES`].
+    light_samples: u64,
     // Scratch buffers reused by every polygon.
     points: Vec<Vec3>,
     normals: Vec<Vec3>,
@@ -141,8 +144,8 @@ impl Parser {
                 self.scene.spp = self.lx.expect_uint("the samples per pixel", 0..=1 << 16)? as u32;
                 Ok(())
             }
-            b"l" => self.point_light(),
-            b"lq" => self.quad_light(),
+            b"l" => self.point_light(tok),
+            b"lq" => self.quad_light(tok),
             b"f" => self.material(tok),
             b"s" => self.sphere(),
             b"p" => self.polygon(tok, false),
@@ -285,7 +288,24 @@ impl Parser {
         Ok(())
     }
 
-    fn point_light(&mut self) -> Result<()> {
+    /// Counts the `samples` of the light at `tok` (`what` says how many, for the error) against
+    /// [`MAX_LIGHT_SAMPLES`].
+    fn light_samples(&mut self, tok: &Tok, samples: u64, what: &str) -> Result<()> {
+        let total = self.light_samples + samples;
+        if total > MAX_LIGHT_SAMPLES {
+            return Err(self.lx.error_at(
+                tok,
+                format!(
+                    "{what} the scene's light samples to {total}, more than the {MAX_LIGHT_SAMPLES} \
+                     allowed: expected fewer lights or smaller grids"
+                ),
+            ));
+        }
+        self.light_samples = total;
+        Ok(())
+    }
+
+    fn point_light(&mut self, l: Tok) -> Result<()> {
         let position = self.lx.expect_vec3("the light position")?;
         // NFF lights may omit the colour: white.
         let color = if self.lx.peek_is_number()? {
@@ -293,11 +313,12 @@ impl Parser {
         } else {
             Vec3::ONE
         };
+        self.light_samples(&l, 1, "this point light brings")?;
         self.scene.add_point_light(position, color);
         Ok(())
     }
 
-    fn quad_light(&mut self) -> Result<()> {
+    fn quad_light(&mut self, lq: Tok) -> Result<()> {
         let corner = self.lx.expect_vec3("the area light corner")?;
         let edge_tok = self.lx.peek()?;
         let edge_u = self.lx.expect_vec3("the area light's first edge")?;
@@ -313,6 +334,12 @@ impl Parser {
                 "the area light's edges are parallel or zero: the quad has no area",
             ));
         }
+        let samples = u64::from(grid) * u64::from(grid);
+        self.light_samples(
+            &lq,
+            samples,
+            &format!("this area light's {grid} x {grid} samples bring"),
+        )?;
         self.scene.area_lights.push(super::QuadLight {
             corner,
             edge_u,

@@ -169,7 +169,7 @@ struct Header {
     face: usize,
     /// The vertex element has nx, ny and nz.
     normals: bool,
-    end_line: u32,
+    end_line: u64,
 }
 
 fn read_header(lx: &mut Lexer) -> Result<Header> {
@@ -555,10 +555,10 @@ struct Ascii<'a> {
     /// The next token starts a new element, and so must be on a later line.
     new_row: bool,
     /// The line of the current element.
-    row_line: u32,
+    row_line: u64,
     /// Column of the last token, and the column just after it.
-    last_col: u32,
-    end_col: u32,
+    last_col: u64,
+    end_col: u64,
 }
 
 impl Ascii<'_> {
@@ -589,7 +589,7 @@ impl Ascii<'_> {
             ));
         }
         self.last_col = tok.col;
-        self.end_col = tok.col + self.lx.text(&tok).len() as u32;
+        self.end_col = tok.col + self.lx.text(&tok).len() as u64;
         Ok(tok)
     }
 

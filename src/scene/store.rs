@@ -248,6 +248,13 @@ pub struct QuadLight {
     pub grid: u32,
 }
 
+/// The most light samples a scene may have in all: a point light is one, a quad light grid². Without
+/// sampling every one is a point light in memory (a [`LightSample`](crate::render::light::LightSample),
+/// 24 bytes) and a shadow ray from every shaded point, so this bounds both, whatever the file's length:
+/// 2^20 is the one quad light of the largest grid (1024²) the format allows, 24 MiB. The shipped scenes
+/// use at most 17 (`scenes/distribution.p3f`: a quad of 4² and a point light).
+pub const MAX_LIGHT_SAMPLES: u64 = 1 << 20;
+
 impl QuadLight {
     /// The point of the light at `(s, t)` in the unit square.
     pub fn point(&self, s: f32, t: f32) -> Vec3 {

@@ -19,7 +19,7 @@ fn parse(text: &str) -> Result<whitted::scene::Scene, Error> {
 }
 
 /// Parses `text`, expects an error on `line` whose message contains `needle`.
-fn fails(text: &str, line: u32, needle: &str) -> Error {
+fn fails(text: &str, line: u64, needle: &str) -> Error {
     let e = parse(text).expect_err("should not parse");
     assert!(
         e.message.contains(needle),
@@ -213,6 +213,43 @@ fn an_area_lights_grid_is_told_its_one_range() {
     }
     parse(&lq("1")).unwrap();
     parse(&lq("1024")).unwrap();
+}
+
+/// Each quad light of N is N² light samples, and a scene's light samples (a point light is one) are
+/// bounded in total: a few kilobytes of `lq ... 1024` lines were gigabytes of samples. The error names
+/// the light that passes the bound, the bound and the total it would make.
+#[test]
+fn light_samples_are_bounded_in_total() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("lights.p3f");
+    let lq = "lq -1.5 5 1 3 0 0 0 0 -3 0.9 0.9 0.9 1024\n";
+    std::fs::write(&path, after_camera(&lq.repeat(200))).unwrap();
+    let (name, image) = (path.to_str().unwrap(), dir.path().join("x.png"));
+    for args in [
+        &["info", name][..],
+        &["render", name, "-o", image.to_str().unwrap()],
+    ] {
+        let err = common::failure(&common::whitted(args));
+        assert_eq!(
+            err,
+            format!(
+                "whitted: {name}:9:1: this area light's 1024 x 1024 samples bring the scene's light samples \
+                 to 2097152, more than the 1048576 allowed: expected fewer lights or smaller grids"
+            )
+        );
+    }
+    // One light of the largest grid is within the bound; a point light more is not.
+    parse(&after_camera(lq)).unwrap();
+    fails(
+        &after_camera(&format!("{lq}l 0 5 0\n")),
+        9,
+        "this point light brings the scene's light samples to 1048577, more than the 1048576 allowed",
+    );
+    fails(
+        &after_camera(&format!("l 0 5 0\n{lq}")),
+        9,
+        "this area light's 1024 x 1024 samples bring the scene's light samples to 1048577",
+    );
 }
 
 #[test]

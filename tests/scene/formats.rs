@@ -201,3 +201,40 @@ fn bare_mesh_scene() {
     assert_eq!(c.triangles, 202_520);
     assert_eq!((c.point_lights, c.materials), (1, 1));
 }
+
+/// A UTF-8 byte-order mark (EF BB BF) before the text, as some Windows editors write, is not part of
+/// the first word: each text format, gzipped or not, loads the same with one as without.
+#[test]
+fn a_byte_order_mark_is_skipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = "v 0 0 0\nv 2 0 0\nv 0 3 0\nv 1 1 4\nf 1 2 3\nf 1 2 4\nf 4 -2 -1\n";
+    let ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+               property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n\
+               0 0 0\n2 0 0\n0 3 0\n1 1 4\n3 0 1 2\n4 0 1 3 2\n";
+    let p3f = "v from 0 0 5 at 0 0 0 up 0 1 0 angle 45 hither 1 resolution 64 48\n\
+               l 1 1 1\nf 1 0 0 1 0 0 0 0\ns 0 0 0 1\np 3 0 0 0 1 0 0 0 1 0\n";
+    for (name, text) in [("m.obj", obj), ("m.ply", ply), ("s.p3f", p3f)] {
+        for gz in [false, true] {
+            let info = |bom: &[u8]| {
+                let mut bytes = [bom, text.as_bytes()].concat();
+                let mut name = format!("{}{name}", if bom.is_empty() { "plain_" } else { "bom_" });
+                if gz {
+                    let mut enc = flate2::write::GzEncoder::new(Vec::new(), Default::default());
+                    std::io::Write::write_all(&mut enc, &bytes).unwrap();
+                    bytes = enc.finish().unwrap();
+                    name += ".gz";
+                }
+                let path = dir.path().join(name);
+                std::fs::write(&path, bytes).unwrap();
+                let out = whitted(&["info", "--json", path.to_str().unwrap()]);
+                assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+                let mut v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+                let map = v.as_object_mut().unwrap();
+                map.remove("scene");
+                map.remove("load_s");
+                v
+            };
+            assert_eq!(info(b"\xef\xbb\xbf"), info(b""), "{name}, gzipped: {gz}");
+        }
+    }
+}

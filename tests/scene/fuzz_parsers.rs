@@ -77,9 +77,10 @@ fn apply(mut bytes: Vec<u8>, edits: &[Edit]) -> Vec<u8> {
     bytes
 }
 
-/// Nothing but white space and `#` comments (the readers' one tokenizer skips both): the one input
-/// whose error names the whole file rather than a place in it.
+/// Nothing but white space and `#` comments (the readers' one tokenizer skips both, and a leading
+/// UTF-8 byte-order mark): the one input whose error names the whole file rather than a place in it.
 fn blank(bytes: &[u8]) -> bool {
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
     // The text formats' whitespace is C's `isspace` (the NFF readers read with `scanf`): space, tab,
     // newline, carriage return, vertical tab and form feed. Rust's `is_ascii_whitespace` leaves out
     // the vertical tab (0x0b), which proptest found as a one-byte file.
@@ -90,7 +91,7 @@ fn blank(bytes: &[u8]) -> bool {
 }
 
 fn check_scene(bytes: Vec<u8>) {
-    let lines = bytes.iter().filter(|&&b| b == b'\n').count() as u32 + 1;
+    let lines = bytes.iter().filter(|&&b| b == b'\n').count() as u64 + 1;
     let blank = blank(&bytes);
     match p3f::parse(Path::new("fuzz.p3f"), Box::new(std::io::Cursor::new(bytes))) {
         Ok(scene) => assert!(scene.camera.validate().is_ok()),

@@ -252,6 +252,21 @@ fn index_errors() {
     assert_eq!(e.location, Location::LineCol(2, 6));
 }
 
+/// A face before any vertex is told that it needs a `v` line first, not a range from 1 to 0.
+#[test]
+fn a_face_before_any_vertex() {
+    for (face, index) in [("f 1 2 3", "1"), ("f -1/1 -2/2 -3/3", "-1"), ("f 0 1 2", "0")] {
+        let e = load_text(&format!("# no vertex yet\n  {face}\n{SQUARE}")).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "{}:2:5: expected a \"v\" line before vertex index {index}, found none",
+                e.path.as_ref().unwrap().display()
+            )
+        );
+    }
+}
+
 #[test]
 fn face_errors() {
     let e = error_on_line_5("f 1 2");

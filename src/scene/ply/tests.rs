@@ -273,7 +273,7 @@ fn with_line(lines: &[String], index: usize, line: &str) -> String {
 }
 
 /// Line numbers of the test mesh's ascii body (1-based).
-const FIRST_FACE_LINE: u32 = 24;
+const FIRST_FACE_LINE: u64 = 24;
 
 #[test]
 fn index_out_of_range() {
