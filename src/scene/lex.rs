@@ -47,21 +47,34 @@ pub struct Lexer {
     peeked: Option<Tok>,
 }
 
+/// Opens `path` for reading if it is a regular file (a link to one is), else says why not. A device
+/// may never end, and a FIFO would wait for a writer: it is opened without waiting (`O_NONBLOCK`, which
+/// changes nothing for a regular file) and refused, as what was opened is checked, not the name.
+pub fn open_regular(path: &Path) -> std::result::Result<File, String> {
+    let mut options = File::options();
+    options.read(true);
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
+    let kind = |m: std::fs::Metadata| match m.file_type() {
+        k if k.is_dir() => Err("it is a directory".to_string()),
+        k if !k.is_file() => Err("it is not a regular file (a FIFO, a device or a socket)".to_string()),
+        _ => Ok(()),
+    };
+    let file = options.open(path).map_err(|e| {
+        // A socket cannot be opened at all: say what it is rather than why the opening failed.
+        match std::fs::metadata(path).map(kind) {
+            Ok(Err(what)) => what,
+            _ => io_reason(&e),
+        }
+    })?;
+    kind(file.metadata().map_err(|e| io_reason(&e))?)?;
+    Ok(file)
+}
+
 /// Opens a file for reading, transparently decompressing gzip (recognised by its magic bytes). Only a
-/// regular file is opened: opening a FIFO would wait for a writer, and a device may never end.
+/// regular file is opened ([`open_regular`]).
 pub fn open(path: &Path) -> Result<Box<dyn Read + Send>> {
-    let cannot = |e: std::io::Error| Error::file(path, format!("cannot open: {}", io_reason(&e)));
-    let kind = std::fs::metadata(path).map_err(cannot)?.file_type();
-    if kind.is_dir() {
-        return Err(Error::file(path, "cannot open: it is a directory"));
-    }
-    if !kind.is_file() {
-        return Err(Error::file(
-            path,
-            "cannot open: it is not a regular file (a FIFO, a device or a socket)",
-        ));
-    }
-    let file = File::open(path).map_err(cannot)?;
+    let file = open_regular(path).map_err(|why| Error::file(path, format!("cannot open: {why}")))?;
     let mut reader = BufReader::with_capacity(BUFFER_SIZE, file);
     let head = reader
         .fill_buf()
