@@ -23,14 +23,15 @@ pub struct ViewArgs {
     #[command(flatten)]
     frame: FrameArgs,
     /// Most bounces after the primary hit, to begin with ([ and ] change it).
-    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(0..=MAX_VIEW_DEPTH as i64))]
+    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(0..=MAX_VIEW_DEPTH as i64),
+          allow_negative_numbers = true)]
     max_depth: u32,
     /// Show and save the image sRGB-encoded (default: linear values, as `render` writes them).
     #[arg(long)]
     srgb: bool,
     /// Close the window after this many frames (for scripted checks; a still camera's frames are its
     /// passes, so the last is `render --passes N`'s image).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..), allow_negative_numbers = true)]
     frames: Option<u32>,
     /// With --frames: save the last frame to this image (.png, .ppm or .exr).
     #[arg(long, requires = "frames")]
