@@ -15,11 +15,11 @@ pub use whitted::render::DEFAULT_DEPTH;
 /// The frame's size, the threads and the structure and kernel that trace it (`render`, `bench`, `view`).
 #[derive(Args)]
 pub struct FrameArgs {
-    /// Image width, 1 to 65536 (keeps the vertical field of view; the height follows the aspect ratio
-    /// if not given).
+    /// Image width, 1 to 65536, or 65535 for the viewer's window (keeps the vertical field of view; the
+    /// height follows the aspect ratio if not given).
     #[arg(long, value_parser = side(), allow_negative_numbers = true)]
     pub width: Option<u32>,
-    /// Image height, 1 to 65536.
+    /// Image height, 1 to 65536, or 65535 for the viewer's window.
     #[arg(long, value_parser = side(), allow_negative_numbers = true)]
     pub height: Option<u32>,
     /// Worker threads, 1 to 1024 (default: all cores).

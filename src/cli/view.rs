@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use whitted::view::{self, Config, state::MAX_VIEW_DEPTH};
+use whitted::render::Options;
+use whitted::view::{self, Config, MAX_WINDOW, state::MAX_VIEW_DEPTH};
 
 use super::Failure;
 use super::frame::{DEFAULT_DEPTH, FrameArgs};
@@ -43,6 +44,7 @@ pub fn run(args: &ViewArgs) -> Result<(), Failure> {
     let scene = load_scene(args.scene.as_deref())?;
     warn(&scene.warnings);
     let options = args.frame.options(&scene, args.max_depth);
+    check_window(&args.frame, &options).map_err(Failure::Usage)?;
     options.validate().map_err(Failure::Usage)?;
     let pool = thread_pool(args.frame.threads)?;
     let name = match &args.scene {
@@ -63,4 +65,27 @@ pub fn run(args: &ViewArgs) -> Result<(), Failure> {
         screenshot: args.screenshot.clone(),
     };
     Ok(view::run(&scene, &pool, &config)?)
+}
+
+/// Refuses a window side over [`MAX_WINDOW`], naming its option: given, or made from the scene's
+/// resolution (alone, or at the aspect ratio of the other side given).
+fn check_window(frame: &FrameArgs, options: &Options) -> whitted::Result<()> {
+    let sides = [
+        ("--width", frame.width, options.width, ("--height", frame.height)),
+        ("--height", frame.height, options.height, ("--width", frame.width)),
+    ];
+    for (option, given, side, (other, other_given)) in sides {
+        if side <= MAX_WINDOW {
+            continue;
+        }
+        let found = match (given, other_given) {
+            (Some(_), _) => side.to_string(),
+            (None, Some(v)) => format!("{side} (the scene's aspect ratio at {other} {v})"),
+            (None, None) => format!("{side} (the scene's resolution)"),
+        };
+        return Err(whitted::Error::msg(format!(
+            "{option}: expected 1 to {MAX_WINDOW} for the viewer's window (X11's largest), found {found}"
+        )));
+    }
+    Ok(())
 }
