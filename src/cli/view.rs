@@ -8,6 +8,7 @@ use whitted::view::{self, Config, MAX_WINDOW, state::MAX_VIEW_DEPTH};
 
 use super::Failure;
 use super::frame::{DEFAULT_DEPTH, FrameArgs};
+use super::outputs;
 use super::setup::{load_scene, thread_pool, warn};
 
 /// Arguments of `whitted view`.
@@ -34,13 +35,17 @@ pub struct ViewArgs {
     /// passes, so the last is `render --passes N`'s image).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..), allow_negative_numbers = true)]
     frames: Option<u32>,
-    /// With --frames: save the last frame to this image (.png, .ppm or .exr).
+    /// With --frames: save the last frame to this image (.png, .ppm, .jpg or .exr; checked before the
+    /// scene is loaded).
     #[arg(long, requires = "frames")]
     screenshot: Option<PathBuf>,
 }
 
 /// Opens the window.
 pub fn run(args: &ViewArgs) -> Result<(), Failure> {
+    if let Some(path) = &args.screenshot {
+        outputs::check(path, false)?;
+    }
     let scene = load_scene(args.scene.as_deref())?;
     warn(&scene.warnings);
     let options = args.frame.options(&scene, args.max_depth);

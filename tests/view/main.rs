@@ -129,6 +129,35 @@ fn a_window_side_over_65535_is_a_usage_error() {
     }
 }
 
+/// `--screenshot` is checked as `render -o` is, before the scene is loaded (here one that does not
+/// exist) and before any window: an unknown format, a missing directory, a link at the path.
+#[test]
+fn a_screenshot_that_could_not_be_written_is_refused_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let link = d.join("link.png");
+    std::os::unix::fs::symlink(d.join("elsewhere.png"), &link).unwrap();
+    for (path, message) in [
+        (
+            d.join("shot.gif"),
+            "unknown image format: expected a .png, .ppm, .jpg, .jpeg or .exr file name".to_string(),
+        ),
+        (
+            d.join("missing/shot.png"),
+            format!("the directory {} does not exist", d.join("missing").display()),
+        ),
+        (
+            link,
+            "is not a regular file (a directory, a link or a device); refusing to replace it".to_string(),
+        ),
+    ] {
+        let shot = path.to_str().unwrap();
+        let args = ["view", "no/such/scene.p3f", "--frames", "1", "--screenshot", shot];
+        let last = common::failure(&headless(&args));
+        assert_eq!(last, format!("whitted: {shot}: {message}"));
+    }
+}
+
 #[test]
 fn under_xvfb_the_scripted_frames_are_render_passes() {
     if !common::have("xvfb-run", &["--help"], "apt-get install xvfb") {
