@@ -5,44 +5,42 @@
 //! interrupted or killed write never leaves half a file under the real name, nor a temporary behind.
 
 use std::fs::File;
-use std::io::Write;
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 use crate::error::{Error, Result};
 
-/// Opens `path` for reading if it is a regular file (after links): a FIFO, a device or a directory is
-/// refused, and opening one never blocks (a FIFO with no writer would wait forever).
-pub fn open_regular(path: &Path) -> std::result::Result<File, NotOpened> {
+/// Opens `path` for reading if it is a regular file (a link to one is), else says why not. A device
+/// may never end, and a FIFO would wait for a writer: it is opened without waiting (`O_NONBLOCK`, which
+/// changes nothing for a regular file) and refused, as what was opened is checked, not the name.
+pub fn open_regular(path: &Path) -> std::result::Result<File, String> {
     let mut options = std::fs::OpenOptions::new();
     options.read(true);
     #[cfg(unix)]
-    {
-        use std::os::unix::fs::OpenOptionsExt;
-        options.custom_flags(libc::O_NONBLOCK);
-    }
-    let file = options.open(path).map_err(NotOpened::Io)?;
-    if !file.metadata().map_err(NotOpened::Io)?.is_file() {
-        return Err(NotOpened::NotRegular);
-    }
+    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
+    let kind = |m: std::fs::Metadata| match m.file_type() {
+        k if k.is_dir() => Err("it is a directory".to_string()),
+        k if !k.is_file() => Err("it is not a regular file (a FIFO, a device or a socket)".to_string()),
+        _ => Ok(()),
+    };
+    let file = options.open(path).map_err(|e| {
+        // A socket cannot be opened at all: say what it is rather than why the opening failed.
+        match std::fs::metadata(path).map(kind) {
+            Ok(Err(what)) => what,
+            _ => io_reason(&e),
+        }
+    })?;
+    kind(file.metadata().map_err(|e| io_reason(&e))?)?;
     Ok(file)
 }
 
-/// Why [`open_regular`] did not open a file.
-#[derive(Debug)]
-pub enum NotOpened {
-    /// The system's error.
-    Io(std::io::Error),
-    /// It is a FIFO, a device, a socket or a directory.
-    NotRegular,
-}
-
-impl std::fmt::Display for NotOpened {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            NotOpened::Io(e) => write!(f, "{e}"),
-            NotOpened::NotRegular => write!(f, "is not a regular file (a device, a pipe or a directory)"),
-        }
+/// The text of an I/O error without Rust's "(os error 2)" suffix.
+pub fn io_reason(e: &io::Error) -> String {
+    let s = e.to_string();
+    match s.find(" (os error") {
+        Some(i) => s[..i].to_string(),
+        None => s,
     }
 }
 
@@ -368,9 +366,12 @@ mod tests {
         let c = std::ffi::CString::new(fifo.as_os_str().as_encoded_bytes()).unwrap();
         // SAFETY: a valid C string.
         assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
-        assert!(matches!(open_regular(&fifo), Err(NotOpened::NotRegular)));
+        assert_eq!(
+            open_regular(&fifo).unwrap_err(),
+            "it is not a regular file (a FIFO, a device or a socket)"
+        );
         assert!(open_regular(Path::new("/dev/zero")).is_err());
-        assert!(open_regular(dir.path()).is_err());
+        assert_eq!(open_regular(dir.path()).unwrap_err(), "it is a directory");
         let file = dir.path().join("f");
         std::fs::write(&file, b"abc").unwrap();
         std::os::unix::fs::symlink(&file, dir.path().join("l")).unwrap();

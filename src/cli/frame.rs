@@ -15,15 +15,16 @@ pub use whitted::render::DEFAULT_DEPTH;
 /// The frame's size, the threads and the structure and kernel that trace it (`render`, `bench`, `view`).
 #[derive(Args)]
 pub struct FrameArgs {
-    /// Image width, 1 to 65536 (keeps the vertical field of view; the height follows the aspect ratio
-    /// if not given).
-    #[arg(long, value_parser = side())]
+    /// Image width, 1 to 65536, or 65535 for the viewer's window (keeps the vertical field of view; the
+    /// height follows the aspect ratio if not given).
+    #[arg(long, value_parser = side(), allow_negative_numbers = true)]
     pub width: Option<u32>,
-    /// Image height, 1 to 65536.
-    #[arg(long, value_parser = side())]
+    /// Image height, 1 to 65536, or 65535 for the viewer's window.
+    #[arg(long, value_parser = side(), allow_negative_numbers = true)]
     pub height: Option<u32>,
     /// Worker threads, 1 to 1024 (default: all cores).
-    #[arg(long, value_parser = clap::builder::RangedU64ValueParser::<usize>::new().range(1..=1024))]
+    #[arg(long, value_parser = clap::builder::RangedI64ValueParser::<usize>::new().range(1..=1024),
+          allow_negative_numbers = true)]
     pub threads: Option<usize>,
     /// Acceleration structure: none, grid, bvh2, bvh4, bvh8 (8-wide nodes, AVX2 where the CPU has it),
     /// auto (bvh8 on CPUs with AVX2, else bvh4) or embree (Embree 3; builds with `--features embree`).

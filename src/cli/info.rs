@@ -35,7 +35,8 @@ pub struct InfoArgs {
     #[arg(long, default_value = "auto")]
     build: BuildKind,
     /// SAH bins per axis (2 to 64).
-    #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(2..=64))]
+    #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(2..=64),
+          allow_negative_numbers = true)]
     bins: u32,
     /// Also print the frame `render --spd` would render (the SPD test procedure's) and the SPD Readme's
     /// ray counts for the scene's file name. Nothing is rendered: `render --spd --stats` counts ours.

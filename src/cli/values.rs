@@ -1,4 +1,9 @@
 //! The parsers of the numbers and points the subcommands take.
+//!
+//! Every option that takes a number takes a value that begins with `-` (`allow_negative_numbers`, or
+//! `allow_hyphen_values` where the value may be `-.5`, `-inf` or more than one number), so that a
+//! negative value reaches the option's parser and is refused with its range, rather than taken for an
+//! option of its own.
 
 use glam::Vec3;
 
@@ -25,11 +30,12 @@ pub fn number(s: &str) -> Result<f32, String> {
     }
 }
 
-/// A finite number of at least 0.
+/// A finite number of at least 0; `-0` is 0.
 pub fn non_negative(s: &str) -> Result<f32, String> {
     let v = number(s)?;
     if v >= 0.0 {
-        Ok(v)
+        // -0 + 0 is +0: the value is the same for every later sign test, bit pattern or digest.
+        Ok(v + 0.0)
     } else {
         Err(format!("expected a number of at least 0, found {s}"))
     }
@@ -43,6 +49,15 @@ pub fn positive(s: &str) -> Result<f32, String> {
     } else {
         Err(format!("expected a number above 0, found {s}"))
     }
+}
+
+/// A whole number of 0 to `u64::MAX`, refused with that range when negative or larger (`u64`'s own
+/// parser calls a minus sign an invalid digit).
+pub fn whole(s: &str) -> Result<u64, String> {
+    s.parse().map_err(|_| match s.parse::<i128>() {
+        Ok(_) => format!("{s} is not in 0..={}", u64::MAX),
+        Err(_) => format!("expected a whole number, found \"{s}\""),
+    })
 }
 
 /// An angle of a field of view: above 0 and below 180 degrees.
@@ -73,6 +88,23 @@ mod tests {
         assert_eq!(
             point("1,inf,3"),
             Err("expected a finite number, found inf".to_string())
+        );
+    }
+
+    #[test]
+    fn negative_numbers_are_refused_with_the_range() {
+        assert_eq!(non_negative("-0").map(f32::to_bits), Ok(0));
+        assert_eq!(
+            non_negative("-1"),
+            Err("expected a number of at least 0, found -1".to_string())
+        );
+        assert_eq!(whole("18446744073709551615"), Ok(u64::MAX));
+        let range = |v: &str| Err(format!("{v} is not in 0..=18446744073709551615"));
+        assert_eq!(whole("-1"), range("-1"));
+        assert_eq!(whole("18446744073709551616"), range("18446744073709551616"));
+        assert_eq!(
+            whole("1.5"),
+            Err("expected a whole number, found \"1.5\"".to_string())
         );
     }
 }

@@ -3,10 +3,12 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use whitted::view::{self, Config, state::MAX_VIEW_DEPTH};
+use whitted::render::Options;
+use whitted::view::{self, Config, MAX_WINDOW, state::MAX_VIEW_DEPTH};
 
 use super::Failure;
 use super::frame::{DEFAULT_DEPTH, FrameArgs};
+use super::outputs;
 use super::setup::{load_scene, thread_pool, warn};
 
 /// Arguments of `whitted view`.
@@ -23,25 +25,31 @@ pub struct ViewArgs {
     #[command(flatten)]
     frame: FrameArgs,
     /// Most bounces after the primary hit, to begin with ([ and ] change it).
-    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(0..=MAX_VIEW_DEPTH as i64))]
+    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(0..=MAX_VIEW_DEPTH as i64),
+          allow_negative_numbers = true)]
     max_depth: u32,
     /// Show and save the image sRGB-encoded (default: linear values, as `render` writes them).
     #[arg(long)]
     srgb: bool,
     /// Close the window after this many frames (for scripted checks; a still camera's frames are its
     /// passes, so the last is `render --passes N`'s image).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..), allow_negative_numbers = true)]
     frames: Option<u32>,
-    /// With --frames: save the last frame to this image (.png, .ppm or .exr).
+    /// With --frames: save the last frame to this image (.png, .ppm, .jpg or .exr; checked before the
+    /// scene is loaded).
     #[arg(long, requires = "frames")]
     screenshot: Option<PathBuf>,
 }
 
 /// Opens the window.
 pub fn run(args: &ViewArgs) -> Result<(), Failure> {
+    if let Some(path) = &args.screenshot {
+        outputs::check(path, false)?;
+    }
     let scene = load_scene(args.scene.as_deref())?;
     warn(&scene.warnings);
     let options = args.frame.options(&scene, args.max_depth);
+    check_window(&args.frame, &options).map_err(Failure::Usage)?;
     options.validate().map_err(Failure::Usage)?;
     let pool = thread_pool(args.frame.threads)?;
     let name = match &args.scene {
@@ -62,4 +70,27 @@ pub fn run(args: &ViewArgs) -> Result<(), Failure> {
         screenshot: args.screenshot.clone(),
     };
     Ok(view::run(&scene, &pool, &config)?)
+}
+
+/// Refuses a window side over [`MAX_WINDOW`], naming its option: given, or made from the scene's
+/// resolution (alone, or at the aspect ratio of the other side given).
+fn check_window(frame: &FrameArgs, options: &Options) -> whitted::Result<()> {
+    let sides = [
+        ("--width", frame.width, options.width, ("--height", frame.height)),
+        ("--height", frame.height, options.height, ("--width", frame.width)),
+    ];
+    for (option, given, side, (other, other_given)) in sides {
+        if side <= MAX_WINDOW {
+            continue;
+        }
+        let found = match (given, other_given) {
+            (Some(_), _) => side.to_string(),
+            (None, Some(v)) => format!("{side} (the scene's aspect ratio at {other} {v})"),
+            (None, None) => format!("{side} (the scene's resolution)"),
+        };
+        return Err(whitted::Error::msg(format!(
+            "{option}: expected 1 to {MAX_WINDOW} for the viewer's window (X11's largest), found {found}"
+        )));
+    }
+    Ok(())
 }

@@ -27,7 +27,7 @@ use std::path::Path;
 
 use crate::digest;
 use crate::error::{Error, Result};
-use crate::files::{NotOpened, open_regular, write_atomically};
+use crate::files::{open_regular, write_atomically};
 use crate::render::Options;
 use crate::render::progressive::{Progressive, area};
 use crate::render::tiles::{self, TILE};
@@ -299,10 +299,7 @@ impl Part {
 /// [`Part::read`], its error without the path.
 fn read_checked(path: &Path) -> std::result::Result<Part, String> {
     let cannot = |e: std::io::Error| format!("cannot read the partial file: {e}");
-    let mut file = open_regular(path).map_err(|e| match e {
-        NotOpened::Io(e) => cannot(e),
-        NotOpened::NotRegular => format!("{e}, so not a partial file"),
-    })?;
+    let mut file = open_regular(path).map_err(|why| format!("cannot read the partial file: {why}"))?;
     let metadata = file.metadata().map_err(cannot)?;
     let len = usize::try_from(metadata.len()).unwrap_or(usize::MAX);
     // Reads up to `n` more bytes (fewer at the end of the file).
@@ -543,13 +540,16 @@ mod tests {
                 path.display()
             )
         );
-        for not_a_file in [Path::new("/dev/zero"), dir.path()] {
+        for (not_a_file, what) in [
+            (
+                Path::new("/dev/zero"),
+                "it is not a regular file (a FIFO, a device or a socket)",
+            ),
+            (dir.path(), "it is a directory"),
+        ] {
             assert_eq!(
                 refused(not_a_file),
-                format!(
-                    "{}: is not a regular file (a device, a pipe or a directory), so not a partial file",
-                    not_a_file.display()
-                )
+                format!("{}: cannot read the partial file: {what}", not_a_file.display())
             );
         }
     }

@@ -84,6 +84,27 @@ fn refuse(need: u64, what: &str, instead: &str, available: Option<u64>) -> Resul
     }
 }
 
+/// Refuses a skybox whose faces take `sky` bytes to load ([`crate::render::env::CubeMap::bytes`]) when,
+/// with a frame's `frame` bytes ([`frame_bytes`], or 0 where the frame is not checked), they need more
+/// than this process can still use ([`available`]).
+pub fn check_skybox(sky: u64, frame: u64) -> Result<(), String> {
+    check_skybox_against(sky, frame, available())
+}
+
+/// [`check_skybox`] against `available` bytes.
+pub fn check_skybox_against(sky: u64, frame: u64, available: Option<u64>) -> Result<(), String> {
+    match available {
+        Some(have) if sky.saturating_add(frame) > have => Err(format!(
+            "the skybox's faces need {} to load, beside the frame's {}, and only {} is available: use \
+             smaller faces",
+            gib(sky),
+            gib(frame),
+            gib(have)
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// `bytes` in GiB with two decimals.
 fn gib(bytes: u64) -> String {
     let mut s = String::new();
@@ -161,6 +182,18 @@ mod tests {
             "a 16384x16384 frame needs 10.50 GiB (42 bytes a pixel) and only 4.00 GiB is available: \
              lower the resolution"
         );
+    }
+
+    #[test]
+    fn refuses_a_skybox_that_does_not_fit_beside_the_frame() {
+        let (sky, frame) = (3 << 30, 1 << 29);
+        assert_eq!(
+            check_skybox_against(sky, frame, Some(3 << 30)).unwrap_err(),
+            "the skybox's faces need 3.00 GiB to load, beside the frame's 0.50 GiB, and only 3.00 GiB \
+             is available: use smaller faces"
+        );
+        assert!(check_skybox_against(sky, frame, Some(sky + frame)).is_ok());
+        assert!(check_skybox_against(sky, frame, None).is_ok());
     }
 
     #[test]

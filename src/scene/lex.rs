@@ -6,7 +6,6 @@
 //! the text (of the data within a gzip), which some Windows editors write, is skipped.
 
 use std::fmt;
-use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read};
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
@@ -15,6 +14,7 @@ use flate2::bufread::MultiGzDecoder;
 use glam::Vec3;
 
 use crate::error::{Error, Result};
+use crate::files::{io_reason, open_regular};
 
 const BUFFER_SIZE: usize = 1 << 16;
 /// No token of any of our formats is this long; binary garbage usually is.
@@ -53,20 +53,9 @@ pub struct Lexer {
 }
 
 /// Opens a file for reading, transparently decompressing gzip (recognised by its magic bytes). Only a
-/// regular file is opened: opening a FIFO would wait for a writer, and a device may never end.
+/// regular file is opened ([`open_regular`]).
 pub fn open(path: &Path) -> Result<Box<dyn Read + Send>> {
-    let cannot = |e: std::io::Error| Error::file(path, format!("cannot open: {}", io_reason(&e)));
-    let kind = std::fs::metadata(path).map_err(cannot)?.file_type();
-    if kind.is_dir() {
-        return Err(Error::file(path, "cannot open: it is a directory"));
-    }
-    if !kind.is_file() {
-        return Err(Error::file(
-            path,
-            "cannot open: it is not a regular file (a FIFO, a device or a socket)",
-        ));
-    }
-    let file = File::open(path).map_err(cannot)?;
+    let file = open_regular(path).map_err(|why| Error::file(path, format!("cannot open: {why}")))?;
     let mut reader = BufReader::with_capacity(BUFFER_SIZE, file);
     let head = reader
         .fill_buf()
@@ -75,15 +64,6 @@ pub fn open(path: &Path) -> Result<Box<dyn Read + Send>> {
         Ok(Box::new(MultiGzDecoder::new(reader)))
     } else {
         Ok(Box::new(reader))
-    }
-}
-
-/// The text of an I/O error without Rust's "(os error 2)" suffix.
-pub fn io_reason(e: &io::Error) -> String {
-    let s = e.to_string();
-    match s.find(" (os error") {
-        Some(i) => s[..i].to_string(),
-        None => s,
     }
 }
 

@@ -601,7 +601,7 @@ impl Parser {
         if !path.is_file() {
             let reason = match std::fs::metadata(&path) {
                 Ok(_) => "it is not a file".to_string(),
-                Err(e) => lex::io_reason(&e),
+                Err(e) => crate::files::io_reason(&e),
             };
             return Err(self.lx.error_at(
                 &tok,

@@ -36,6 +36,9 @@ use state::{Accumulator, Job};
 
 pub use window::run;
 
+/// The largest side of the window: X11's sizes are 16-bit (winit panics on more).
+pub const MAX_WINDOW: u32 = u16::MAX as u32;
+
 /// How the viewer starts.
 #[derive(Clone, Debug)]
 pub struct Config {
@@ -44,7 +47,8 @@ pub struct Config {
     /// The scene file as given (`None`: the built-in scene), for the `render` command printed when an
     /// image is saved.
     pub scene: Option<PathBuf>,
-    /// The window's size, the bounce limit, the kernel, the seed and the roughness.
+    /// The window's size (at most [`MAX_WINDOW`] a side), the bounce limit, the kernel, the seed and
+    /// the roughness.
     pub options: Options,
     /// The first acceleration structure.
     pub accel: AccelKind,

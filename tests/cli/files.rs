@@ -208,7 +208,7 @@ fn merge_refuses_a_fifo_part_without_waiting() {
     assert_eq!(
         err,
         format!(
-            "whitted: {}: is not a regular file (a device, a pipe or a directory), so not a partial file\n",
+            "whitted: {}: cannot read the partial file: it is not a regular file (a FIFO, a device or a socket)\n",
             fifo.display()
         )
     );

@@ -535,6 +535,120 @@ fn every_option_out_of_range_is_a_usage_error() {
     }
 }
 
+/// A negative value of a numeric option is read as a value, not as an option of its own (clap's refusal
+/// of which tells the user to write `-- -1`, which fails too): it is a usage error that gives the
+/// option's range, for every numeric option of every subcommand (`merge` has none). `--aperture -0` is
+/// 0.
+#[test]
+fn negative_values_are_refused_with_the_range_of_their_option() {
+    let ranged = |option: &str, value: &str, message: &str| {
+        format!("error: invalid value '{value}' for '{option}': {message}")
+    };
+    let range = |option: &str, r: &str| ranged(option, "-1", &format!("-1 is not in {r}"));
+    let at_least_0 = "expected a number of at least 0, found -1";
+    let frame = [
+        ("--width", range("--width <WIDTH>", "1..=65536")),
+        ("--height", range("--height <HEIGHT>", "1..=65536")),
+        ("--threads", range("--threads <THREADS>", "1..=1024")),
+        ("--max-depth", range("--max-depth <MAX_DEPTH>", "0..=64")),
+        ("--spp", range("--spp <SPP>", "0..=65536")),
+        (
+            "--fov",
+            ranged(
+                "--fov <DEG>",
+                "-1",
+                "expected an angle between 0 and 180 degrees (both excluded), found -1",
+            ),
+        ),
+    ];
+    let render_only = [
+        ("--bins", range("--bins <BINS>", "2..=64")),
+        ("--seed", range("--seed <SEED>", "0..=18446744073709551615")),
+        ("--passes", range("--passes <PASSES>", "1..=4294967295")),
+        ("--every", range("--every <EVERY>", "1..=4294967295")),
+        ("--aperture", ranged("--aperture <APERTURE>", "-1", at_least_0)),
+        ("--roughness", ranged("--roughness <ROUGHNESS>", "-1", at_least_0)),
+        (
+            "--focal",
+            ranged("--focal <FOCAL>", "-1", "expected a number above 0, found -1"),
+        ),
+    ];
+    let no_tip = |err: &str| assert!(!err.contains("-- -"), "{err}");
+    for (option, first_line) in frame.iter().chain(&render_only) {
+        no_tip(&render_usage(&[DEFAULT, option, "-1"], first_line));
+    }
+    for (option, first_line) in frame
+        .iter()
+        .chain(&[("--frames", range("--frames <FRAMES>", "1..=4294967295"))])
+    {
+        no_tip(&usage_error(&["bench", DEFAULT, option, "-1"], first_line));
+    }
+    no_tip(&usage_error(
+        &["info", DEFAULT, "--bins", "-1"],
+        &range("--bins <BINS>", "2..=64"),
+    ));
+    #[cfg(feature = "view")]
+    for (option, range_of) in [
+        ("--width", "1..=65536"),
+        ("--height", "1..=65536"),
+        ("--threads", "1..=1024"),
+        ("--max-depth", "0..=32"),
+        ("--frames", "1..=4294967295"),
+    ] {
+        let name = option.trim_start_matches("--").replace('-', "_").to_uppercase();
+        let first_line = range(&format!("{option} <{name}>"), range_of);
+        no_tip(&usage_error(&["view", DEFAULT, option, "-1"], &first_line));
+    }
+    // Values that are not one number: a part and a pass range.
+    for (args, first_line) in [
+        (
+            ["--tiles", "-1/2"],
+            ranged(
+                "--tiles <K/N>",
+                "-1/2",
+                "part -1/2 does not exist: K counts from 0 to N-1",
+            ),
+        ),
+        (
+            ["--passes-range", "-1..2"],
+            ranged(
+                "--passes-range <A..B>",
+                "-1..2",
+                "the pass range -1..2 starts before pass 0: passes count from 0",
+            ),
+        ),
+        (
+            ["--passes-range", "0..-2"],
+            ranged("--passes-range <A..B>", "0..-2", "the pass range 0..-2 is empty"),
+        ),
+    ] {
+        no_tip(&render_usage(&[&[DEFAULT][..], &args].concat(), &first_line));
+    }
+    // Forms of a negative number that are not digits alone.
+    render_usage(
+        &[DEFAULT, "--aperture", "-.5"],
+        &ranged(
+            "--aperture <APERTURE>",
+            "-.5",
+            "expected a number of at least 0, found -.5",
+        ),
+    );
+    render_usage(
+        &[DEFAULT, "--roughness", "-inf"],
+        &ranged(
+            "--roughness <ROUGHNESS>",
+            "-inf",
+            "expected a finite number, found -inf",
+        ),
+    );
+    // -0 is 0: the pinhole's image, byte for byte.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let zero = render(d, "zero.png", &small(DOF, &["--aperture", "0"]));
+    let minus_zero = render(d, "minus_zero.png", &small(DOF, &["--aperture", "-0"]));
+    assert!(bytes(&zero) == bytes(&minus_zero), "--aperture -0 is not 0");
+}
+
 /// What a scene file holds, counted from its text as `info` documents it: spheres, triangles (a
 /// polygon of N vertices is N - 2), boxes, planes, cones, point lights, area lights, and materials (one
 /// per `f`, plus the default grey one when an object comes before the first `f`).

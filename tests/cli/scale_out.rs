@@ -182,7 +182,7 @@ fn merge_refuses_bad_parts_by_name() {
         d,
         &[&p[0], "/dev/zero", &p[2]],
         "/dev/zero",
-        "is not a regular file",
+        "it is not a regular file",
     );
     let mut flipped = bytes.clone();
     flipped[bytes.len() / 2] ^= 4;

@@ -7,7 +7,9 @@
 //! - seeded test rays of a few scenes against brute force: the same hit or miss, primitive and `t`
 //!   (within 1e-5), except on rays that cross within `kit::agreement::EDGE` of a triangle's edge, which are
 //!   counted and bounded; and the kit's oracle on the same rays with single rays, packets and any hit;
-//! - the command line: `render`, `info` and `bench --compare` take `embree`.
+//! - the command line: `render`, `info` and `bench --compare` take `embree`;
+//! - coordinates past Embree's largest, `FLT_LARGE`: rays from there render as with our BVH8 (Embree's
+//!   traversal asserts against them, aborting the process), a scene that reaches there is refused.
 //!
 //! Without the feature this file checks the one-line refusal of `--accel embree` instead, and says,
 //! through a test that fails under `WHITTED_REQUIRE_ALL=1`, that the Embree tests did not run.
@@ -302,6 +304,80 @@ mod with_embree {
             String::from_utf8_lossy(&out.stderr)
         );
         String::from_utf8(out.stdout).unwrap()
+    }
+
+    /// Embree asserts that a ray's origin lies within its largest coordinate, `FLT_LARGE` (1.844e18),
+    /// an assertion that aborts the process (exit status 134): a camera at 1.85e18, or a camera near
+    /// the scene whose shadow rays leave a plane's points beyond it. Such rays render as with our BVH8,
+    /// with every kernel: a large sphere and box seen from 3e18 (unlit: their outlines against the
+    /// background colour; a triangle's test overflows at such sizes, ours as Embree's), and a plane
+    /// seen nearly edge-on from 1e12 whose points lit are 3.3e18 away.
+    #[test]
+    fn rays_from_beyond_embrees_largest_coordinate_render_as_with_our_bvh8() {
+        let dir = tempfile::tempdir().unwrap();
+        let far_camera = dir.path().join("far_camera.p3f");
+        std::fs::write(
+            &far_camera,
+            "v\nfrom 0 0 1\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0.01\nresolution 64 48\n\
+             bclr 0.2 0.4 0.6\nf 1 1 1 1 0 0 0 0\ns 0 0 0 5e17\n\
+             box 1e17 -1.2e18 -1e18  9e17 -8e17 1e18\n",
+        )
+        .unwrap();
+        let far_plane = dir.path().join("far_plane.p3f");
+        std::fs::write(
+            &far_plane,
+            "v\nfrom 0 1e12 0\nat 1e12 0.9999997e12 0\nup 0 1 0\nangle 0.000001\nhither 0.01\n\
+             resolution 16 16\nl 0 1e13 0\nf 1 1 1 1 0 0 0 0\npl 0 0 0  1 0 0  0 0 -1\ns 0 0 0 1\n",
+        )
+        .unwrap();
+        let far = ["--from", "3e18,0,0", "--at", "0,0,0", "--up", "0,1,0"];
+        for (scene, extra) in [(&far_camera, &far[..]), (&far_plane, &[])] {
+            let scene = scene.to_str().unwrap();
+            for kernel in ["single", "packet", "stream"] {
+                let image = |accel: &str| {
+                    let out = dir.path().join(format!("{accel}.png"));
+                    let out_s = out.to_str().unwrap();
+                    let args = ["render", scene, "-q", "--accel", accel, "--kernel", kernel];
+                    run_ok(&[&args[..], extra, &["-o", out_s]].concat());
+                    common::rgb(&out).into_raw()
+                };
+                let (ours, embree) = (image("bvh8"), image("embree"));
+                let (d, n) = (differing(&ours, &embree), ours.len() / 3);
+                assert!(
+                    d * 1000 <= n,
+                    "{scene} {kernel}: {d} of {n} pixels differ by more than 1/255"
+                );
+            }
+        }
+    }
+
+    /// Embree's builders leave out, without a word, the primitives that reach past its largest
+    /// coordinate: such a scene is refused with the reason (status 1) rather than rendered without them.
+    #[test]
+    fn a_scene_past_embrees_largest_coordinate_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let scene = dir.path().join("huge.p3f");
+        std::fs::write(
+            &scene,
+            "v\nfrom 0 0 1e20\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0.01\nresolution 16 16\n\
+             bclr 0.2 0.4 0.6\nf 1 1 1 1 0 0 0 0\ns 0 0 0 1e19\n",
+        )
+        .unwrap();
+        let out = dir.path().join("out.png");
+        let run = common::whitted(&[
+            "render",
+            scene.to_str().unwrap(),
+            "--accel",
+            "embree",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(
+            common::failure(&run),
+            "whitted: Embree takes coordinates below 1.844e18 (its FLT_LARGE), and the scene's \
+             primitives reach 1e19: another --accel renders it"
+        );
+        assert!(!out.exists());
     }
 
     /// `render`, `info` and `bench` take `--accel embree`; `bench --compare embree` times both.

@@ -329,3 +329,163 @@ fn a_course_scene_renders_its_sky() {
     }
     assert!(background > 64 * 64 / 10, "only {background} background pixels");
 }
+
+/// `whitted ARGS` under `ulimit -v` of `kib` KiB, killed (and the test failed) if it runs for more than
+/// a minute: what it is given here must neither hang it nor let it take the machine's memory.
+fn whitted_bounded(kib: u64, args: &[&str]) -> std::process::Output {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let mut child = Command::new("sh")
+        .arg("-c")
+        .arg(format!("ulimit -v {kib} && exec \"$0\" \"$@\""))
+        .arg(env!("CARGO_BIN_EXE_whitted"))
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(60) {
+            child.kill().unwrap();
+            let out = child.wait_with_output().unwrap();
+            panic!(
+                "whitted {args:?} still ran after a minute: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+/// A scene of nothing but the skybox `sky` and the background colour 0.2 0.4 0.6, 32 x 24 pixels.
+fn sky_scene(dir: &Path) -> PathBuf {
+    let scene = dir.join("scene.p3f");
+    std::fs::write(
+        &scene,
+        "spp 0\nbclr 0.2 0.4 0.6\nenv sky\nv\nfrom 0 0 0\nat 1 0.5 0.25\nup 0 1 0\nangle 60\n\
+         hither 0.01\nresolution 32 24\n",
+    )
+    .unwrap();
+    scene
+}
+
+/// Renders `sky_scene` under [`whitted_bounded`], which must succeed with `warning` about the face
+/// `sky/FACE` as its only output and the background colour in every pixel.
+#[track_caller]
+fn renders_the_background_colour(dir: &Path, kib: u64, face: &str, warning: &str) {
+    let scene = sky_scene(dir);
+    let out = dir.join("out.png");
+    let run = whitted_bounded(
+        kib,
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--quiet",
+        ],
+    );
+    let err = String::from_utf8(run.stderr).unwrap();
+    assert!(run.status.success(), "{err}");
+    let face = dir.join("sky").join(face);
+    assert_eq!(
+        err,
+        format!(
+            "whitted: warning: {}: {warning}; using the background colour\n",
+            face.display()
+        )
+    );
+    assert!(common::rgb(&out).pixels().all(|p| p.0 == [51, 102, 153]));
+}
+
+/// A face that is a FIFO (opened for reading, it waits for a writer) or a link to `/dev/zero` (a JPEG
+/// decoder reads it to its end, which never comes) is refused at once, with the scene loader's words,
+/// and the background colour is rendered; a link to a regular file is a face like any other.
+#[test]
+fn a_face_that_is_not_a_regular_file_is_refused_at_once() {
+    let not_regular = "cannot open the skybox face: it is not a regular file (a FIFO, a device or a socket)";
+    let dir = sky_folder();
+    let png = dir.path().join("sky/right.png");
+    std::fs::remove_file(&png).unwrap();
+    let c = std::ffi::CString::new(png.to_str().unwrap()).unwrap();
+    // SAFETY: a valid NUL-terminated path.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0, "mkfifo");
+    renders_the_background_colour(dir.path(), 2_000_000, "right.png", not_regular);
+
+    // A .jpg is taken before a .png of the same face.
+    let jpg = dir.path().join("sky/right.jpg");
+    std::os::unix::fs::symlink("/dev/zero", &jpg).unwrap();
+    renders_the_background_colour(dir.path(), 2_000_000, "right.jpg", not_regular);
+
+    std::fs::remove_file(&jpg).unwrap();
+    std::fs::remove_file(&png).unwrap();
+    std::os::unix::fs::symlink(skybox_dir().join("right.png"), &png).unwrap();
+    assert_sees(dir.path(), [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], 0, 31, 31);
+}
+
+/// A 1 x 1 PNG whose header says it is `width` x `height` (its data is then far too short).
+fn png_declaring(width: u32, height: u32) -> Vec<u8> {
+    let mut png = Vec::new();
+    image::RgbImage::new(1, 1)
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    // The IHDR chunk follows the 8-byte signature: length (4), type (4), width (4), height (4), ...
+    assert_eq!(&png[12..16], b"IHDR");
+    png[16..20].copy_from_slice(&width.to_be_bytes());
+    png[20..24].copy_from_slice(&height.to_be_bytes());
+    // Its CRC covers its type and its 13 bytes of data.
+    let mut crc = flate2::Crc::new();
+    crc.update(&png[12..29]);
+    png[29..33].copy_from_slice(&crc.sum().to_be_bytes());
+    png
+}
+
+/// Six faces whose headers say `side` x `side`, in `dir/sky`.
+fn faces_declaring(dir: &Path, side: u32) {
+    std::fs::create_dir(dir.join("sky")).unwrap();
+    for name in FACES {
+        std::fs::write(dir.join(format!("sky/{name}.png")), png_declaring(side, side)).unwrap();
+    }
+}
+
+/// A small file whose header declares a face of 12000 x 12000 texels (six of them are 2.4 GiB decoded,
+/// for a 32 x 24 render) is refused from its header, before anything is decoded, with the bound.
+#[test]
+fn a_face_over_8192_texels_a_side_is_refused_from_its_header() {
+    let dir = tempfile::tempdir().unwrap();
+    faces_declaring(dir.path(), 12000);
+    renders_the_background_colour(
+        dir.path(),
+        1_000_000,
+        "right.png",
+        "the skybox face is 12000x12000 texels: at most 8192x8192",
+    );
+}
+
+/// The skybox's images are counted in the memory check a render makes before any work: six faces of
+/// 8192 x 8192 texels need 1.31 GiB (each as 8-bit RGB, and one more face while it is decoded), which
+/// `ulimit -v 1000000` (under 0.96 GiB) does not leave: refused, status 1, nothing written.
+#[test]
+fn a_skybox_larger_than_the_memory_limit_is_refused_before_any_work() {
+    let dir = tempfile::tempdir().unwrap();
+    faces_declaring(dir.path(), 8192);
+    let scene = sky_scene(dir.path());
+    let out = dir.path().join("out.png");
+    let run = whitted_bounded(
+        1_000_000,
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--quiet",
+        ],
+    );
+    let err = common::failed(&run, 1);
+    let prefix = "whitted: the skybox's faces need 1.31 GiB to load, beside the frame's 0.00 GiB, and only ";
+    let suffix = " GiB is available: use smaller faces\n";
+    assert!(err.starts_with(prefix) && err.ends_with(suffix), "{err}");
+    assert!(!out.exists());
+}

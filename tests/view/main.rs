@@ -84,6 +84,80 @@ fn screenshot_needs_frames() {
     assert_eq!(out.status.code(), Some(2), "a usage error");
 }
 
+/// A window side over 65535 (X11's sizes are 16-bit) is a usage error naming the option and its range,
+/// given or made from the scene's frame, before any window (winit panics on it, and the process never
+/// exits): here, without a display, before the display is even looked for.
+#[test]
+fn a_window_side_over_65535_is_a_usage_error() {
+    let expected = |option: &str, found: &str| {
+        format!(
+            "whitted: {option}: expected 1 to 65535 for the viewer's window (X11's largest), found {found}"
+        )
+    };
+    let scene = "scenes/balls_low.p3f";
+    for (args, last) in [
+        (
+            &[scene, "--width", "65536", "--height", "8"][..],
+            expected("--width", "65536"),
+        ),
+        (
+            &[scene, "--width", "8", "--height", "65536"],
+            expected("--height", "65536"),
+        ),
+    ] {
+        let out = headless(&[&["view"][..], args].concat());
+        assert_eq!(common::usage_failure(&out), last, "{args:?}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let wide = dir.path().join("wide.p3f");
+    std::fs::write(
+        &wide,
+        "v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0.01\nresolution 65536 4\n\
+         l 0 5 5\nf 1 1 1 1 0 0 0 0\ns 0 0 0 1\n",
+    )
+    .unwrap();
+    let wide = wide.to_str().unwrap();
+    for (args, last) in [
+        (&[wide][..], expected("--width", "65536 (the scene's resolution)")),
+        (
+            &[wide, "--height", "8"],
+            expected("--width", "131072 (the scene's aspect ratio at --height 8)"),
+        ),
+    ] {
+        let out = headless(&[&["view"][..], args].concat());
+        assert_eq!(common::usage_failure(&out), last, "{args:?}");
+    }
+}
+
+/// `--screenshot` is checked as `render -o` is, before the scene is loaded (here one that does not
+/// exist) and before any window: an unknown format, a missing directory, a link at the path.
+#[test]
+fn a_screenshot_that_could_not_be_written_is_refused_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let link = d.join("link.png");
+    std::os::unix::fs::symlink(d.join("elsewhere.png"), &link).unwrap();
+    for (path, message) in [
+        (
+            d.join("shot.gif"),
+            "unknown image format: expected a .png, .ppm, .jpg, .jpeg or .exr file name".to_string(),
+        ),
+        (
+            d.join("missing/shot.png"),
+            format!("the directory {} does not exist", d.join("missing").display()),
+        ),
+        (
+            link,
+            "is not a regular file (a directory, a link or a device); refusing to replace it".to_string(),
+        ),
+    ] {
+        let shot = path.to_str().unwrap();
+        let args = ["view", "no/such/scene.p3f", "--frames", "1", "--screenshot", shot];
+        let last = common::failure(&headless(&args));
+        assert_eq!(last, format!("whitted: {shot}: {message}"));
+    }
+}
+
 #[test]
 fn under_xvfb_the_scripted_frames_are_render_passes() {
     if !common::have("xvfb-run", &["--help"], "apt-get install xvfb") {

@@ -20,6 +20,12 @@
 //! upper limit. Embree requires `tnear >= 0`: a negative `t_min` (which nothing of ours passes) is
 //! searched from 0.
 //!
+//! Coordinates: Embree takes them below [`FLT_LARGE`]. Its builders leave out any primitive that
+//! reaches past it, so [`Embree::new`] refuses such a scene; and its traversal asserts that every ray's
+//! origin lies within it, an assertion that aborts the process in Debian's build, so a ray from
+//! farther (a camera far out, a shadow ray from a far point of a plane) goes to Embree from where it
+//! enters the cube of half-side `FLT_LARGE`, which holds all of Embree's scene (`verbs.rs`).
+//!
 //! Single rays go through `rtcIntersect1`/`rtcOccluded1`, packets through `rtcIntersect8`/
 //! `rtcOccluded8` with the packet's active mask as Embree's `valid` lanes. The device and scene are
 //! released when the last clone of the accelerator is dropped; Embree's errors (`rtcGetDeviceError`,
@@ -43,6 +49,11 @@ use std::sync::{Arc, Mutex};
 use super::prims::{PrimKind, Prims};
 use crate::error::{Error, Result};
 use callbacks::{Others, bounds, intersect, occluded};
+
+/// Embree's largest coordinate, `FLT_LARGE` (1.844e18, Embree's `common/math/constants.h`): a
+/// primitive must lie strictly within it, a ray's origin and direction within it
+/// (`Ray::valid`).
+pub const FLT_LARGE: f32 = 1.844e18;
 
 /// Embree's geometry id of the triangles.
 const TRIANGLES: u32 = 0;
@@ -162,6 +173,18 @@ impl<'a> Embree<'a> {
     /// thread pool; the tracing calls run on the caller's threads).
     pub fn new(prims: Prims<'a>, quality: Quality, threads: usize) -> Result<Self> {
         let scene = prims.scene;
+        let reach = (0..prims.bounded())
+            .map(|id| {
+                let b = prims.bounds(id);
+                b.min.abs().max(b.max.abs()).max_element()
+            })
+            .fold(0.0, f32::max);
+        if reach >= FLT_LARGE {
+            return Err(Error::msg(format!(
+                "Embree takes coordinates below {FLT_LARGE:e} (its FLT_LARGE), and the scene's \
+                 primitives reach {reach:e}: another --accel renders it"
+            )));
+        }
         let others: Vec<u32> = (0..prims.bounded())
             .filter(|&id| !matches!(prims.kind(id), PrimKind::Triangle(_)))
             .collect();

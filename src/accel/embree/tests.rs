@@ -108,6 +108,49 @@ fn user_geometry_and_planes() {
     assert!(e.error().is_ok());
 }
 
+/// A ray from beyond Embree's largest coordinate (its traversal asserts against it, which aborts the
+/// process) is traced from where it enters Embree's range: our own test's hit at its `t`, single rays
+/// and packets, closest and any hit; one that never comes within range misses. A scene that reaches
+/// past it is refused.
+#[test]
+fn rays_from_beyond_flt_large_find_our_hits() {
+    let mut s = scene();
+    let m = s.add_material(Material::default());
+    s.add_sphere(Vec3::ZERO, 1e17, m);
+    let prims = Prims::new(&s);
+    let e = Embree::new(prims, Quality::High, 1).unwrap();
+    let toward = Ray::new(Vec3::new(3e18, 0.0, 0.0), Vec3::NEG_X);
+    let away = Ray::new(toward.origin, Vec3::X);
+    let near = Ray::new(Vec3::new(0.0, 0.0, 5e17), Vec3::NEG_Z);
+    let close = |got: f32, ray: &Ray| {
+        let (t, _, _) = prims.intersect(0, ray, 0.0, f32::INFINITY).unwrap();
+        assert!((got - t).abs() <= 1e-6 * t, "t {got} vs {t}");
+    };
+    let mut hit = Hit::miss(f32::INFINITY);
+    assert!(e.intersect(&toward, 0.0, &mut hit));
+    assert_eq!(hit.prim, 0);
+    close(hit.t, &toward);
+    assert!(!e.intersect(&away, 0.0, &mut Hit::miss(f32::INFINITY)));
+    assert!(e.occluded(&toward, 0.0, f32::INFINITY));
+    assert!(!e.occluded(&toward, 0.0, 2.8e18));
+    assert!(!e.occluded(&away, 0.0, f32::INFINITY));
+    let rays = [toward, away, near, toward, away, near, toward, away];
+    let mut hits = [Hit::miss(f32::INFINITY); PACKET];
+    assert_eq!(e.intersect_packet(&rays, 0xff, 0.0, &mut hits), 0b0110_1101);
+    for k in [0, 2, 3, 5, 6] {
+        close(hits[k].t, &rays[k]);
+    }
+    let t_max = [f32::INFINITY; PACKET];
+    assert_eq!(e.occluded_packet(&rays, 0xff, 0.0, &t_max), 0b0110_1101);
+    assert!(e.error().is_ok());
+
+    let mut huge = scene();
+    let m = huge.add_material(Material::default());
+    huge.add_sphere(Vec3::ZERO, 2e18, m);
+    let refused = Embree::new(Prims::new(&huge), Quality::High, 1).unwrap_err();
+    assert!(refused.message.contains("reach 2e18"), "{refused}");
+}
+
 /// An empty scene and one of planes only answer without Embree's scene; clones share one.
 #[test]
 fn empty_and_planes_only() {

@@ -2,12 +2,14 @@
 //! through `rtcIntersect8`/`rtcOccluded8` with the packet's active mask as Embree's `valid` lanes, the
 //! planes tested beside the hierarchy first, as every accelerator of ours tests them.
 
-use super::{Embree, TRIANGLES, ffi};
+use glam::Vec3;
+
+use super::{Embree, FLT_LARGE, TRIANGLES, ffi};
 use crate::accel::packet::{HitPacket, PACKET, RayPacket, bits};
 use crate::accel::policy::{AnyHit, Closest, HitPolicy};
 use crate::accel::prims::{Hit, Prims};
 use crate::accel::structure::Structure;
-use crate::geometry::ray::{Ray, ahead};
+use crate::geometry::ray::{Ray, ahead, safe_inverse};
 
 impl Embree<'_> {
     /// True when nothing but planes is there to trace (Embree's scene is empty).
@@ -35,8 +37,11 @@ impl Embree<'_> {
         if self.empty() || !holds_any(t_min, hit.t) {
             return found;
         }
+        let Some((r, shift)) = ray1(ray, t_min, hit.t) else {
+            return found;
+        };
         let mut rh = ffi::RayHit1 {
-            ray: ray1(ray, t_min, hit.t),
+            ray: r,
             hit: ffi::Hit1 {
                 ng: [0.0; 3],
                 u: 0.0,
@@ -51,7 +56,8 @@ impl Embree<'_> {
         if rh.hit.geom_id == ffi::INVALID_GEOMETRY_ID {
             return found;
         }
-        *hit = self.hit(rh.ray.tfar, rh.hit.geom_id, rh.hit.prim_id, rh.hit.u, rh.hit.v);
+        let t = ours(rh.ray.tfar, shift, hit.t);
+        *hit = self.hit(t, rh.hit.geom_id, rh.hit.prim_id, rh.hit.u, rh.hit.v);
         true
     }
 
@@ -68,7 +74,9 @@ impl Embree<'_> {
         if self.empty() || !holds_any(t_min, t_max) {
             return false;
         }
-        let mut r = ray1(ray, t_min, t_max);
+        let Some((mut r, _)) = ray1(ray, t_min, t_max) else {
+            return false;
+        };
         // SAFETY: as in `intersect`.
         unsafe { ffi::rtcOccluded1(self.inner.scene, &mut ffi::Context::new(), &mut r) };
         r.tfar == f32::NEG_INFINITY
@@ -91,11 +99,13 @@ impl Embree<'_> {
         }
         let mut rh = ffi::RayHit8::default();
         let mut valid = ffi::Valid8::default();
-        let mut live = 0u8;
+        let (mut live, mut shifts) = (0u8, [0.0; PACKET]);
         for k in bits(active).filter(|&k| holds_any(t_min, hits[k].t)) {
-            lane(&mut rh.ray, k, &rays[k], t_min, hits[k].t);
-            valid.0[k] = -1;
-            live |= 1 << k;
+            if let Some(shift) = lane(&mut rh.ray, k, &rays[k], t_min, hits[k].t) {
+                shifts[k] = shift;
+                valid.0[k] = -1;
+                live |= 1 << k;
+            }
         }
         if live == 0 {
             return found;
@@ -106,8 +116,8 @@ impl Embree<'_> {
         for k in bits(live) {
             let g = rh.hit.geom_id[k];
             if g != ffi::INVALID_GEOMETRY_ID {
-                let h = &rh.hit;
-                hits[k] = self.hit(rh.ray.tfar[k], g, h.prim_id[k], h.u[k], h.v[k]);
+                let (h, t) = (&rh.hit, ours(rh.ray.tfar[k], shifts[k], hits[k].t));
+                hits[k] = self.hit(t, g, h.prim_id[k], h.u[k], h.v[k]);
                 found |= 1 << k;
             }
         }
@@ -132,9 +142,10 @@ impl Embree<'_> {
         let mut valid = ffi::Valid8::default();
         let mut live = 0u8;
         for k in bits(active & !blocked).filter(|&k| holds_any(t_min, t_max[k])) {
-            lane(&mut r, k, &rays[k], t_min, t_max[k]);
-            valid.0[k] = -1;
-            live |= 1 << k;
+            if lane(&mut r, k, &rays[k], t_min, t_max[k]).is_some() {
+                valid.0[k] = -1;
+                live |= 1 << k;
+            }
         }
         if live == 0 {
             return blocked;
@@ -199,27 +210,71 @@ fn holds_any(t_min: f32, t_max: f32) -> bool {
     t_max > t_min
 }
 
-/// An Embree ray for our open interval `(t_min, t_max)`: Embree searches `(tnear, tfar]`.
+/// `ray` over `(t_min, t_max)` as Embree takes it: the ray, its interval and the `t` on `ray` of its
+/// origin (the shift to add back to the `t` Embree finds). A ray from within [`FLT_LARGE`] is itself,
+/// shifted by 0. One from farther starts where it enters the cube of half-side `FLT_LARGE`, which
+/// holds all of Embree's scene: `None` where its interval holds no point of that cube, as for a NaN
+/// origin or a direction out of range (nothing of ours makes them), where Embree can hit nothing.
 #[inline]
-fn ray1(ray: &Ray, t_min: f32, t_max: f32) -> ffi::Ray1 {
-    ffi::Ray1 {
+fn within_range(ray: &Ray, t_min: f32, t_max: f32) -> Option<(Ray, f32, f32, f32)> {
+    // False for NaN too.
+    let fits = |v: Vec3| v.abs().cmple(Vec3::splat(FLT_LARGE)).all();
+    let t_min = ahead(t_min);
+    if fits(ray.origin) && fits(ray.dir) {
+        return Some((*ray, t_min, t_max, 0.0));
+    }
+    if ray.origin.is_nan() || !fits(ray.dir) {
+        return None;
+    }
+    let inv = safe_inverse(ray.dir);
+    let a = (Vec3::splat(-FLT_LARGE) - ray.origin) * inv;
+    let b = (Vec3::splat(FLT_LARGE) - ray.origin) * inv;
+    let near = a.min(b).max_element().max(t_min);
+    let far = a.max(b).min_element().min(t_max);
+    if near >= far {
+        return None;
+    }
+    // Rounding may leave the entry point just outside.
+    let origin = ray
+        .at(near)
+        .clamp(Vec3::splat(-FLT_LARGE), Vec3::splat(FLT_LARGE));
+    Some((Ray::new(origin, ray.dir), 0.0, t_max - near, near))
+}
+
+/// Our `t` of the `t` Embree found on a ray shifted by `shift` ([`within_range`]), below our `t_max`
+/// where their sum rounds up to it.
+#[inline]
+fn ours(t: f32, shift: f32, t_max: f32) -> f32 {
+    (t + shift).min(t_max.next_down())
+}
+
+/// An Embree ray for our open interval `(t_min, t_max)` ([`within_range`]): Embree searches
+/// `(tnear, tfar]`. Returns it and its shift.
+#[inline]
+fn ray1(ray: &Ray, t_min: f32, t_max: f32) -> Option<(ffi::Ray1, f32)> {
+    let (ray, t_min, t_max, shift) = within_range(ray, t_min, t_max)?;
+    let r = ffi::Ray1 {
         org: ray.origin.to_array(),
-        tnear: ahead(t_min),
+        tnear: t_min,
         dir: ray.dir.to_array(),
         time: 0.0,
         tfar: t_max.next_down(),
         mask: u32::MAX,
         id: 0,
         flags: 0,
-    }
+    };
+    Some((r, shift))
 }
 
-/// Lane `k` of a packet: `ray` over `(t_min, t_max)`, as [`ray1`].
+/// Lane `k` of a packet: `ray` over `(t_min, t_max)`, as [`ray1`]. Returns its shift, or `None` (the
+/// lane left as it is) where Embree can hit nothing.
 #[inline]
-fn lane(r: &mut ffi::Ray8, k: usize, ray: &Ray, t_min: f32, t_max: f32) {
+fn lane(r: &mut ffi::Ray8, k: usize, ray: &Ray, t_min: f32, t_max: f32) -> Option<f32> {
+    let (ray, t_min, t_max, shift) = within_range(ray, t_min, t_max)?;
     for a in 0..3 {
         r.org[a][k] = ray.origin[a];
         r.dir[a][k] = ray.dir[a];
     }
-    (r.tnear[k], r.tfar[k], r.mask[k]) = (ahead(t_min), t_max.next_down(), u32::MAX);
+    (r.tnear[k], r.tfar[k], r.mask[k]) = (t_min, t_max.next_down(), u32::MAX);
+    Some(shift)
 }

@@ -14,15 +14,17 @@ pub struct BenchArgs {
     /// for in the source tree the binary was built from, then under the current directory).
     pub scene: Option<PathBuf>,
     /// Frames timed (after one frame of warm-up).
-    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..),
+          allow_negative_numbers = true)]
     pub frames: u32,
     #[command(flatten)]
     pub frame: FrameArgs,
     /// Samples per pixel, 0 to 65536 (default: the file's).
-    #[arg(long, value_parser = spp())]
+    #[arg(long, value_parser = spp(), allow_negative_numbers = true)]
     pub spp: Option<u32>,
     /// Most bounces after the primary hit (default 6, at most 64).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=whitted::render::MAX_DEPTH as i64))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=whitted::render::MAX_DEPTH as i64),
+          allow_negative_numbers = true)]
     pub max_depth: Option<u32>,
     /// Time frames of the SPD test procedure (513x513 corner rays, spp 0, 4 bounces) and compare their
     /// counts with the SPD Readme's (refuses --spp, --width, --height and --max-depth).

@@ -6,7 +6,7 @@ use clap::Args;
 
 use crate::cli::frame::{BuildKind, CameraArgs, FrameArgs, spd_refuses, spp};
 use crate::cli::report::Format;
-use crate::cli::values::{non_negative, positive};
+use crate::cli::values::{non_negative, positive, whole};
 use whitted::render::cost::CostKind;
 
 /// Arguments of `whitted render`.
@@ -19,11 +19,11 @@ pub struct RenderArgs {
     pub output: PathBuf,
     /// Render only part K of N of the image (K from 0; a fixed split of its tiles, balanced by area)
     /// into a .partial file, for `whitted merge` to combine with the other parts.
-    #[arg(long, value_name = "K/N", value_parser = part_of)]
+    #[arg(long, value_name = "K/N", value_parser = part_of, allow_hyphen_values = true)]
     pub tiles: Option<(u32, u32)>,
     /// Render only passes A to B-1 (from 0) of the --passes of a progressive render, into a .partial
     /// file, for `whitted merge`.
-    #[arg(long, value_name = "A..B", value_parser = pass_range)]
+    #[arg(long, value_name = "A..B", value_parser = pass_range, allow_hyphen_values = true)]
     pub passes_range: Option<(u32, u32)>,
     /// Write the sums of the passes as a .partial file (implied by an output name ending in .partial).
     #[arg(long)]
@@ -36,36 +36,39 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub frame: FrameArgs,
     /// Most bounces after the primary hit (default 6, at most 64).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=whitted::render::MAX_DEPTH as i64))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=whitted::render::MAX_DEPTH as i64),
+          allow_negative_numbers = true)]
     pub max_depth: Option<u32>,
     /// How the BVHs are built: auto (today optimized), sah, optimized (binned SAH, then
     /// reinsertion) or midpoint (the BVH2 only; the wide BVHs collapse a binned-SAH BVH2).
     #[arg(long, default_value = "auto")]
     pub build: BuildKind,
     /// SAH bins per axis (2 to 64).
-    #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(2..=64))]
+    #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(2..=64),
+          allow_negative_numbers = true)]
     pub bins: u32,
     /// Samples per pixel (overrides the file's `spp`): 0 for one ray through each pixel centre, else
     /// n x n jittered samples (rounded up to a square), at most 65536.
-    #[arg(long, value_parser = spp())]
+    #[arg(long, value_parser = spp(), allow_negative_numbers = true)]
     pub spp: Option<u32>,
     /// Seed of every random number (the same seed gives the same image, on any number of threads).
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, value_parser = whole, allow_negative_numbers = true)]
     pub seed: u64,
     /// Lens aperture in pixels of the view plane (overrides the file's; 0 = pinhole).
-    #[arg(long, value_parser = non_negative)]
+    #[arg(long, value_parser = non_negative, allow_hyphen_values = true)]
     pub aperture: Option<f32>,
     /// Focal distance as a ratio of the view-plane distance (overrides the file's).
-    #[arg(long, value_parser = positive)]
+    #[arg(long, value_parser = positive, allow_hyphen_values = true)]
     pub focal: Option<f32>,
     /// Roughness of materials whose `f` line gives none (0 = perfect mirrors; the course used 0.3).
-    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative, allow_hyphen_values = true)]
     pub roughness: f32,
     /// Progressive rendering: this many passes of one jittered sample per pixel, averaged.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..),
+          allow_negative_numbers = true)]
     pub passes: u32,
     /// With --passes: write the image every K passes, so the render can be watched converging.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..), allow_negative_numbers = true)]
     pub every: Option<u32>,
     /// With --passes: also keep each written snapshot in this directory, numbered by pass.
     #[arg(long)]
@@ -136,32 +139,52 @@ impl RenderArgs {
     }
 }
 
-/// Two numbers `a` and `b` written `a{sep}b`; `expected` says what the whole should look like.
-fn u32_pair(s: &str, sep: &str, expected: &str) -> Result<(u32, u32), String> {
+/// Two whole numbers `a` and `b` written `a{sep}b`, each at most `u32::MAX`: `expected` says what the
+/// whole should look like, and `check` refuses a pair out of its range (negative numbers reach it, to
+/// be refused with the range rather than as malformed).
+fn u32_pair(
+    s: &str,
+    sep: &str,
+    expected: &str,
+    check: impl Fn(i64, i64) -> Result<(), String>,
+) -> Result<(u32, u32), String> {
     let bad = || format!("expected {expected}; found \"{s}\"");
     let (a, b) = s.split_once(sep).ok_or_else(bad)?;
-    Ok((
-        a.trim().parse().map_err(|_| bad())?,
-        b.trim().parse().map_err(|_| bad())?,
-    ))
+    let number = |t: &str| t.trim().parse::<i64>().map_err(|_| bad());
+    let (a, b) = (number(a)?, number(b)?);
+    check(a, b)?;
+    let small = |v: i64| u32::try_from(v).map_err(|_| bad());
+    Ok((small(a)?, small(b)?))
 }
 
-/// `K/N` with K < N.
+/// `K/N` with 0 <= K < N.
 fn part_of(s: &str) -> Result<(u32, u32), String> {
-    let (k, n) = u32_pair(s, "/", "K/N, part K (from 0) of N parts, such as 3/8")?;
-    if n == 0 || k >= n {
-        return Err(format!("part {k}/{n} does not exist: K counts from 0 to N-1"));
-    }
-    Ok((k, n))
+    u32_pair(s, "/", "K/N, part K (from 0) of N parts, such as 3/8", |k, n| {
+        if k < 0 || k >= n {
+            return Err(format!("part {k}/{n} does not exist: K counts from 0 to N-1"));
+        }
+        Ok(())
+    })
 }
 
-/// `A..B` with A < B.
+/// `A..B` with 0 <= A < B.
 fn pass_range(s: &str) -> Result<(u32, u32), String> {
-    let (a, b) = u32_pair(s, "..", "A..B, passes A to B-1 (from 0), such as 0..16")?;
-    if a >= b {
-        return Err(format!("the pass range {a}..{b} is empty"));
-    }
-    Ok((a, b))
+    u32_pair(
+        s,
+        "..",
+        "A..B, passes A to B-1 (from 0), such as 0..16",
+        |a, b| {
+            if a < 0 {
+                return Err(format!(
+                    "the pass range {a}..{b} starts before pass 0: passes count from 0"
+                ));
+            }
+            if a >= b {
+                return Err(format!("the pass range {a}..{b} is empty"));
+            }
+            Ok(())
+        },
+    )
 }
 
 /// `whitted render`'s arguments alone, for the tests that parse them.

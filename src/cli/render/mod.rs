@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 
 use whitted::accel::{Accel, Prims};
 use whitted::parts::partial::PartSettings;
+use whitted::render::env::Background;
 use whitted::render::progressive::Progressive;
 use whitted::render::{Renderer, memory};
 
@@ -42,10 +43,14 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
     // A part's sums cover its tiles only; a whole frame is refused here rather than aborted later, and
     // so is any counting render (its pixels' rays and heatmap span the frame, even for a part).
     let counted = plan.options.count_steps;
+    let mut frame = 0;
     if plan.tiles.is_none() || counted {
         let (w, h) = (plan.options.width, plan.options.height);
         memory::check(w, h, counted, true).map_err(whitted::Error::msg)?;
+        frame = memory::frame_bytes(w, h, counted);
     }
+    // The skybox is read whole for a part too.
+    memory::check_skybox(Background::bytes(&scene), frame).map_err(whitted::Error::msg)?;
     let pool = thread_pool(plan.threads)?;
     let loaded = start.elapsed();
     let build_start = Instant::now();
