@@ -46,7 +46,7 @@ pub fn io_reason(e: &io::Error) -> String {
 
 /// Checks, before any work, that `path` can be written as [`write_atomically`] will: its directory
 /// exists and takes a new file (a temporary is made there under an unpredictable name and removed),
-/// and what is at `path`, if anything, is a regular file it may replace ([`check_target`]).
+/// and what is at `path`, if anything, is a regular file this user may replace (`check_target`).
 pub fn check_writable(path: &Path) -> Result<()> {
     check_target(path).map_err(|e| Error::file(path, e))?;
     takes_new_files(dir_of(path)).map_err(|e| Error::file(path, e))

@@ -10,8 +10,13 @@ use std::io::{self, Write};
 /// process ends at once with status 0 (whatever the command wrote to files is complete by then,
 /// since its answer is printed last).
 pub fn out(text: impl Display) -> whitted::Result<()> {
+    out_bytes(text.to_string().as_bytes())
+}
+
+/// Writes `bytes` to standard output and flushes them, as [`out`] writes text (an image, `-o -`).
+pub fn out_bytes(bytes: &[u8]) -> whitted::Result<()> {
     let mut stdout = io::stdout().lock();
-    match write!(stdout, "{text}").and_then(|()| stdout.flush()) {
+    match stdout.write_all(bytes).and_then(|()| stdout.flush()) {
         Ok(()) => Ok(()),
         Err(e) if e.kind() == io::ErrorKind::BrokenPipe => std::process::exit(0),
         Err(e) => Err(whitted::Error::msg(format!(

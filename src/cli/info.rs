@@ -10,19 +10,23 @@ use whitted::accel::bvh2::Stats;
 use whitted::accel::quality::TreeView;
 use whitted::accel::{Accel, AccelKind, Prims};
 use whitted::render::spd::{self, Counts};
-use whitted::scene::{self, Scene};
+use whitted::scene::Scene;
 
 use super::Failure;
 use super::console;
 use super::frame::{BuildKind, build_options};
 use super::report::{accel_name, image_size, simd_name};
-use super::setup::warn;
+use super::setup::{load_scene, scene_name, warn};
 
 /// Arguments of `whitted info`.
 #[derive(Args)]
 pub struct InfoArgs {
-    /// The scene: .p3f, .nff, .ply or .obj, optionally gzipped.
+    /// The scene: .p3f, .nff, .ply or .obj, optionally gzipped; `-` reads it from standard input.
     scene: PathBuf,
+    /// The scene's format, whatever its name: p3f, nff, ply or obj (for `-`, standard input, the
+    /// format is otherwise told from its first statement).
+    #[arg(long, value_parser = crate::cli::values::scene_format)]
+    pub format: Option<whitted::scene::Format>,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
@@ -62,7 +66,7 @@ pub fn run(args: &InfoArgs) -> Result<(), Failure> {
         )));
     }
     let start = Instant::now();
-    let scene = scene::load(&args.scene)?;
+    let scene = load_scene(Some(&args.scene), args.format)?;
     let load_s = start.elapsed().as_secs_f64();
     warn(&scene.warnings);
     let built = match args.accel {
@@ -161,7 +165,7 @@ fn vec3(v: Vec3) -> String {
 /// bounded (planes alone).
 fn json(path: &Path, scene: &Scene, load_s: f64) -> Map<String, Value> {
     let mut out = Map::new();
-    out.insert("scene".into(), path.display().to_string().into());
+    out.insert("scene".into(), scene_name(path).into());
     for (k, v) in counts(scene) {
         out.insert(k.into(), v.into());
     }
@@ -281,7 +285,7 @@ fn spd_text(scene: &Scene, readme: Option<&Counts>) -> String {
 }
 
 fn text(path: &Path, scene: &Scene, load_s: f64) -> String {
-    let mut out = format!("scene         {}\n", path.display());
+    let mut out = format!("scene         {}\n", scene_name(path));
     for (k, v) in counts(scene) {
         out += &format!("{:<13} {v}\n", k.replace('_', " "));
     }

@@ -61,7 +61,7 @@ impl Report {
         rays: RayCounts,
     ) -> Report {
         Report {
-            scene: scene.map_or("(default scene)".into(), |p| p.display().to_string()),
+            scene: scene.map_or("(default scene)".into(), crate::cli::setup::scene_name),
             cpu: whitted::machine::cpu(),
             options: *options,
             accel: accel_name(accel),

@@ -60,6 +60,17 @@ pub fn whole(s: &str) -> Result<u64, String> {
     })
 }
 
+/// An image format named by `--output-format`.
+pub fn image_format(s: &str) -> Result<whitted::render::film::ImageFormat, String> {
+    whitted::render::film::ImageFormat::of(std::path::Path::new(&format!("x.{s}")))
+        .map_err(|_| format!("expected png, ppm, jpg, jpeg or exr, found \"{s}\""))
+}
+
+/// A scene format named by `--format`.
+pub fn scene_format(s: &str) -> Result<whitted::scene::Format, String> {
+    whitted::scene::Format::named(s).ok_or_else(|| format!("expected p3f, nff, ply or obj, found \"{s}\""))
+}
+
 /// An angle of a field of view: above 0 and below 180 degrees.
 pub fn angle(s: &str) -> Result<f32, String> {
     let v = number(s)?;

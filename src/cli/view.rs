@@ -20,8 +20,13 @@ button to orbit the point looked at; the wheel zooms (field of view); R returns 
 [ and ]: fewer/more bounces; P: progressive refinement; C: cost heatmap (nodes visited, primitives tested, off; with its \
 legend); F12 or Ctrl-S: save the image; Escape: quit.")]
 pub struct ViewArgs {
-    /// The scene (.p3f, .nff, .ply, .obj, optionally .gz); the built-in default scene if omitted.
+    /// The scene (.p3f, .nff, .ply, .obj, optionally .gz; `-` reads it from standard input); the
+    /// built-in default scene if omitted.
     scene: Option<PathBuf>,
+    /// The scene's format, whatever its name: p3f, nff, ply or obj (for `-`, standard input, the
+    /// format is otherwise told from its first statement).
+    #[arg(long, value_parser = crate::cli::values::scene_format)]
+    pub format: Option<whitted::scene::Format>,
     #[command(flatten)]
     frame: FrameArgs,
     /// Most bounces after the primary hit, to begin with ([ and ] change it).
@@ -46,7 +51,7 @@ pub fn run(args: &ViewArgs) -> Result<(), Failure> {
     if let Some(path) = &args.screenshot {
         outputs::check(path, false)?;
     }
-    let scene = load_scene(args.scene.as_deref())?;
+    let scene = load_scene(args.scene.as_deref(), args.format)?;
     warn(&scene.warnings);
     let options = args.frame.options(&scene, args.max_depth);
     check_window(&args.frame, &options).map_err(Failure::Usage)?;

@@ -66,43 +66,58 @@ impl Film {
         let format = ImageFormat::of(path)?;
         write_atomically(path, |file| {
             let mut out = Recorded::new(std::io::BufWriter::new(file));
-            let encoded = match format {
-                ImageFormat::Png => self.write_png(&mut out, srgb).map_err(|e| e.to_string()),
-                ImageFormat::Ppm => {
-                    // A binary P6 pixmap: the image crate's default PNM flavour is PAM (P7), which
-                    // few viewers read under a .ppm name.
-                    use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
-                    PnmEncoder::new(&mut out)
-                        .with_subtype(PnmSubtype::Pixmap(SampleEncoding::Binary))
-                        .encode(
-                            &self.to_rgb8(srgb)[..],
-                            self.width,
-                            self.height,
-                            image::ExtendedColorType::Rgb8,
-                        )
-                        .map_err(|e| e.to_string())
-                }
-                ImageFormat::Jpeg => {
-                    image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, JPEG_QUALITY)
-                        .encode(
-                            &self.to_rgb8(srgb),
-                            self.width,
-                            self.height,
-                            image::ExtendedColorType::Rgb8,
-                        )
-                        .map_err(|e| e.to_string())
-                }
-                ImageFormat::Exr => {
-                    let data: Vec<f32> = self.pixels.iter().flat_map(|p| p.to_array()).collect();
-                    image::Rgb32FImage::from_raw(self.width, self.height, data)
-                        .expect("buffer size matches")
-                        .write_with_encoder(image::codecs::openexr::OpenExrEncoder::new(&mut out))
-                        .map_err(|e| e.to_string())
-                }
-            };
+            let encoded = self.encode(&mut out, format, srgb);
             out.finish(encoded)
         })
         .map_err(|e| Error::file(path, format!("cannot write the image: {e}")))
+    }
+
+    /// The image's bytes in `format`, as [`Film::write`] writes them (for standard output).
+    pub fn encoded(&self, format: ImageFormat, srgb: bool) -> std::result::Result<Vec<u8>, String> {
+        let mut out = std::io::Cursor::new(Vec::new());
+        self.encode(&mut out, format, srgb)?;
+        Ok(out.into_inner())
+    }
+
+    /// Encodes the image in `format` into `out`.
+    fn encode(
+        &self,
+        mut out: impl std::io::Write + std::io::Seek,
+        format: ImageFormat,
+        srgb: bool,
+    ) -> std::result::Result<(), String> {
+        match format {
+            ImageFormat::Png => self.write_png(&mut out, srgb).map_err(|e| e.to_string()),
+            ImageFormat::Ppm => {
+                // A binary P6 pixmap: the image crate's default PNM flavour is PAM (P7), which
+                // few viewers read under a .ppm name.
+                use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
+                PnmEncoder::new(&mut out)
+                    .with_subtype(PnmSubtype::Pixmap(SampleEncoding::Binary))
+                    .encode(
+                        &self.to_rgb8(srgb)[..],
+                        self.width,
+                        self.height,
+                        image::ExtendedColorType::Rgb8,
+                    )
+                    .map_err(|e| e.to_string())
+            }
+            ImageFormat::Jpeg => image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, JPEG_QUALITY)
+                .encode(
+                    &self.to_rgb8(srgb),
+                    self.width,
+                    self.height,
+                    image::ExtendedColorType::Rgb8,
+                )
+                .map_err(|e| e.to_string()),
+            ImageFormat::Exr => {
+                let data: Vec<f32> = self.pixels.iter().flat_map(|p| p.to_array()).collect();
+                image::Rgb32FImage::from_raw(self.width, self.height, data)
+                    .expect("buffer size matches")
+                    .write_with_encoder(image::codecs::openexr::OpenExrEncoder::new(&mut out))
+                    .map_err(|e| e.to_string())
+            }
+        }
     }
 
     /// 8-bit RGB PNG with its colour space recorded.

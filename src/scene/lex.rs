@@ -56,7 +56,12 @@ pub struct Lexer {
 /// regular file is opened ([`open_regular`]).
 pub fn open(path: &Path) -> Result<Box<dyn Read + Send>> {
     let file = open_regular(path).map_err(|why| Error::file(path, format!("cannot open: {why}")))?;
-    let mut reader = BufReader::with_capacity(BUFFER_SIZE, file);
+    decompressed(path, Box::new(file))
+}
+
+/// `reader`, decompressed if it starts with gzip's magic bytes; `path` names it in errors.
+pub fn decompressed(path: &Path, reader: Box<dyn Read + Send>) -> Result<Box<dyn Read + Send>> {
+    let mut reader = BufReader::with_capacity(BUFFER_SIZE, reader);
     let head = reader
         .fill_buf()
         .map_err(|e| Error::file(path, format!("cannot read: {}", io_reason(&e))))?;
@@ -64,6 +69,31 @@ pub fn open(path: &Path) -> Result<Box<dyn Read + Send>> {
         Ok(Box::new(MultiGzDecoder::new(reader)))
     } else {
         Ok(Box::new(reader))
+    }
+}
+
+/// The first bytes of `reader`, up to the end of its first line that is neither blank nor a comment
+/// (or 64 KiB, or the end): enough to tell its format ([`super::Format::sniff`]). The caller reads
+/// them before the rest.
+pub fn head(path: &Path, reader: &mut dyn Read) -> Result<Vec<u8>> {
+    const MAX: usize = 64 << 10;
+    let mut head = Vec::new();
+    let mut chunk = [0u8; 4096];
+    loop {
+        let statement = head
+            .split(|&b| b == b'\n')
+            .rev()
+            .skip(1)
+            .any(|l: &[u8]| !l.trim_ascii().is_empty() && !l.trim_ascii().starts_with(b"#"));
+        if statement || head.len() >= MAX {
+            return Ok(head);
+        }
+        match reader.read(&mut chunk) {
+            Ok(0) => return Ok(head),
+            Ok(n) => head.extend_from_slice(&chunk[..n]),
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(Error::file(path, format!("cannot read: {}", io_reason(&e)))),
+        }
     }
 }
 

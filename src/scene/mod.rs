@@ -74,6 +74,36 @@ pub enum Format {
 }
 
 impl Format {
+    /// The format a `--format` value names: `p3f` and `nff` are one grammar.
+    pub fn named(name: &str) -> Option<Format> {
+        match name {
+            "p3f" | "nff" => Some(Format::Scene),
+            "ply" => Some(Format::Ply),
+            "obj" => Some(Format::Obj),
+            _ => None,
+        }
+    }
+
+    /// The format whose first statement starts `head` (decompressed; comments and blank lines are
+    /// skipped): `ply` is PLY; an OBJ-only word (`vn`, `vt`, `o`, `g`, `mtllib`, `usemtl`), or `v` with
+    /// numbers on its line, is OBJ (NFF's `v` stands alone); a .p3f/NFF keyword is a scene. `None`
+    /// where it is none of these.
+    pub fn sniff(head: &[u8]) -> Option<Format> {
+        let line = head
+            .split(|&b| b == b'\n')
+            .map(|l| l.trim_ascii())
+            .find(|l| !l.is_empty() && !l.starts_with(b"#"))?;
+        let mut words = line.split(|b| b.is_ascii_whitespace()).filter(|w| !w.is_empty());
+        let first = words.next()?;
+        match first {
+            b"ply" => Some(Format::Ply),
+            b"vn" | b"vt" | b"vp" | b"o" | b"g" | b"mtllib" | b"usemtl" => Some(Format::Obj),
+            b"v" if words.next().is_some() => Some(Format::Obj),
+            _ if p3f::KEYWORDS.split(", ").any(|k| k.as_bytes() == first) => Some(Format::Scene),
+            _ => None,
+        }
+    }
+
     /// The format of `path` from its extension, if it is one of ours.
     pub fn of(path: &Path) -> Option<Format> {
         // Lossy: a name that is not UTF-8 still ends in an ASCII extension.
@@ -110,24 +140,61 @@ pub fn load_mesh(path: &Path) -> Result<MeshData> {
 /// ```
 pub fn load(path: &Path) -> Result<Scene> {
     match Format::of(path) {
-        Some(Format::Scene) => p3f::load(path),
-        Some(Format::Ply | Format::Obj) => {
-            let mesh = load_mesh(path)?;
-            let scene = p3f::scene_around_mesh(&mesh);
-            match scene.overflow_since(Counts::default()) {
-                Some(what) => Err(Error::file(
-                    path,
-                    format!(
-                        "a {what} reaches past the largest finite coordinate, {:e}",
-                        f32::MAX
-                    ),
-                )),
-                None => Ok(scene),
-            }
-        }
+        Some(format) => load_as(path, format),
         None => Err(Error::file(
             path,
-            "unknown scene format: expected a .p3f, .nff, .ply or .obj name (optionally .gz)",
+            "unknown scene format: expected a .p3f, .nff, .ply or .obj name (optionally .gz), or give \
+             the format (--format)",
         )),
+    }
+}
+
+/// Loads the file `path` as a scene of `format`, whatever its name.
+pub fn load_as(path: &Path, format: Format) -> Result<Scene> {
+    parse(path, lex::open(path)?, format)
+}
+
+/// How standard input is named in errors (`<stdin>:3:7: ...`) and reports.
+pub const STDIN: &str = "<stdin>";
+
+/// Reads a scene from `reader` (standard input, say), gzipped or not, in `format`, or in the format
+/// its first statement names ([`Format::sniff`]); it is named [`STDIN`] in errors, and relative
+/// `include` and `env` paths are relative to the current directory.
+pub fn read(reader: Box<dyn std::io::Read + Send>, format: Option<Format>) -> Result<Scene> {
+    let name = Path::new(STDIN);
+    let mut reader = lex::decompressed(name, reader)?;
+    let head = lex::head(name, &mut reader)?;
+    let format = match format {
+        Some(format) => format,
+        None => Format::sniff(&head).ok_or_else(|| {
+            Error::file(
+                name,
+                "cannot tell the scene's format from its first statement: expected a .p3f or NFF \
+                 statement, \"ply\" or an OBJ statement; give it with --format p3f|nff|ply|obj",
+            )
+        })?,
+    };
+    let reader = std::io::Read::chain(std::io::Cursor::new(head), reader);
+    parse(name, Box::new(reader), format)
+}
+
+/// Parses `reader` (decompressed) as a scene of `format`; `path` names it in errors and anchors
+/// relative paths.
+fn parse(path: &Path, reader: Box<dyn std::io::Read + Send>, format: Format) -> Result<Scene> {
+    let mesh = match format {
+        Format::Scene => return p3f::parse(path, reader),
+        Format::Ply => ply::parse(path, reader)?,
+        Format::Obj => obj::parse(path, reader)?,
+    };
+    let scene = p3f::scene_around_mesh(&mesh);
+    match scene.overflow_since(Counts::default()) {
+        Some(what) => Err(Error::file(
+            path,
+            format!(
+                "a {what} reaches past the largest finite coordinate, {:e}",
+                f32::MAX
+            ),
+        )),
+        None => Ok(scene),
     }
 }

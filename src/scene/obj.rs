@@ -4,6 +4,7 @@
 //! other statement (texture coordinates, groups, materials, lines...) is skipped to the end of its line.
 //! OBJ is line oriented, so a statement ends where the next token starts a later line.
 
+use std::io::Read;
 use std::path::Path;
 
 use glam::Vec3;
@@ -20,7 +21,12 @@ use crate::error::{Error, Result};
 /// is the last one). A face is smooth if every corner names a normal and none of those is zero, else flat.
 /// Errors say `path:line:col`.
 pub fn load(path: &Path) -> Result<MeshData> {
-    let mut lx = Lexer::open(path)?;
+    parse(path, lex::open(path)?)
+}
+
+/// Parses a OBJ mesh from `reader` (decompressed); `path` names it in errors.
+pub fn parse(path: &Path, reader: Box<dyn Read + Send>) -> Result<MeshData> {
+    let mut lx = Lexer::new(path, reader);
     let mut mesh = MeshData::default();
     let mut polygons = Polygons::default();
     let mut face = Face::default();

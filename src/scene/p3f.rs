@@ -14,7 +14,8 @@ use super::{MeshData, load_mesh};
 use crate::error::{Error, Location, Result};
 
 /// The keywords a scene may use, for the unknown-keyword message.
-const KEYWORDS: &str = "v, b, bclr, env, accel, spp, l, lq, f, s, p, pp, c, box, pl, mesh, include";
+pub(crate) const KEYWORDS: &str =
+    "v, b, bclr, env, accel, spp, l, lq, f, s, p, pp, c, box, pl, mesh, include";
 /// More vertices than any sane polygon or mesh has; larger counts are typos or garbage.
 const MAX_COUNT: u64 = 1 << 30;
 /// Vertex buffers grow with the data instead of trusting a count this much larger than what was read.

@@ -7,6 +7,7 @@
 //! files of scanners (confidence, intensity, edges, materials) load as they are.
 
 use std::fmt;
+use std::io::Read;
 use std::path::Path;
 
 use glam::Vec3;
@@ -27,7 +28,12 @@ const FORMATS: &str = "\"format ascii 1.0\", \"binary_little_endian 1.0\" or \"b
 ///
 /// Errors say where: `path:line:col` in the header and in an ascii body, `path: byte N` in a binary body.
 pub fn load(path: &Path) -> Result<MeshData> {
-    let mut lx = Lexer::open(path)?;
+    parse(path, lex::open(path)?)
+}
+
+/// Parses a PLY mesh from `reader` (decompressed); `path` names it in errors.
+pub fn parse(path: &Path, reader: Box<dyn Read + Send>) -> Result<MeshData> {
+    let mut lx = Lexer::new(path, reader);
     let header = read_header(&mut lx)?;
     match header.format {
         Format::Ascii => {

@@ -2,7 +2,8 @@
 //! `info`, `bench` and `render --stats` parsed as a script reads them (`cli_report`), full and closed
 //! standard streams and a FIFO for a scene (`console`), every documented
 //! option by a value it must change or keep (`options`), Ctrl-C, SIGTERM and `--resume` (`interrupt`),
-//! what the commands do to the files around them (`files`), and split renders merged (`scale_out`).
+//! what the commands do to the files around them (`files`), scenes and images through pipes (`pipes`),
+//! and split renders merged (`scale_out`).
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -14,4 +15,5 @@ mod files;
 mod heatmap;
 mod interrupt;
 mod options;
+mod pipes;
 mod scale_out;

@@ -11,8 +11,13 @@ use crate::cli::frame::{CameraArgs, FrameArgs, spp};
 #[derive(Args)]
 pub struct BenchArgs {
     /// The scene (default: the course's `scenes/dragon.p3f`, 100k triangles, 800x600, 1 spp, looked
-    /// for in the source tree the binary was built from, then under the current directory).
+    /// for in the source tree the binary was built from, then under the current directory; `-` reads
+    /// it from standard input).
     pub scene: Option<PathBuf>,
+    /// The scene's format, whatever its name: p3f, nff, ply or obj (for `-`, standard input, the
+    /// format is otherwise told from its first statement).
+    #[arg(long, value_parser = crate::cli::values::scene_format)]
+    pub format: Option<whitted::scene::Format>,
     /// Frames timed (after one frame of warm-up).
     #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..),
           allow_negative_numbers = true)]

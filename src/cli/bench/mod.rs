@@ -22,7 +22,7 @@ use super::setup::{load_scene, thread_pool, warn};
 pub fn run(args: &BenchArgs) -> Result<(), Failure> {
     let path = plan::scene(args)?;
     let start = Instant::now();
-    let mut scene = load_scene(Some(&path))?;
+    let mut scene = load_scene(Some(&path), args.format)?;
     warn(&scene.warnings);
     args.camera.apply(&mut scene.camera).map_err(Failure::Usage)?;
     let loaded = start.elapsed();

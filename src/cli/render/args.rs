@@ -8,15 +8,26 @@ use crate::cli::frame::{BuildKind, CameraArgs, FrameArgs, spd_refuses, spp};
 use crate::cli::report::Format;
 use crate::cli::values::{non_negative, positive, whole};
 use whitted::render::cost::CostKind;
+use whitted::render::film::ImageFormat;
 
 /// Arguments of `whitted render`.
 #[derive(Args)]
 pub struct RenderArgs {
-    /// The scene (.p3f, .nff, .ply, .obj, optionally .gz); the built-in default scene if omitted.
+    /// The scene (.p3f, .nff, .ply, .obj, optionally .gz; `-` reads it from standard input); the
+    /// built-in default scene if omitted.
     pub scene: Option<PathBuf>,
-    /// Output image: .png, .ppm, .jpg (8-bit) or .exr (linear float); or a .partial file (see --tiles).
+    /// The scene's format, whatever its name: p3f, nff, ply or obj (for `-`, standard input, the
+    /// format is otherwise told from its first statement).
+    #[arg(long, value_parser = crate::cli::values::scene_format)]
+    pub format: Option<whitted::scene::Format>,
+    /// Output image: .png, .ppm, .jpg (8-bit) or .exr (linear float); or a .partial file (see --tiles);
+    /// `-` writes the image to standard output (PNG, or as --output-format says).
     #[arg(short, long, default_value = "render.png")]
     pub output: PathBuf,
+    /// The format of the image written to standard output (`-o -`): png, ppm, jpg or exr (a file's
+    /// name gives its own).
+    #[arg(long, value_parser = crate::cli::values::image_format)]
+    pub output_format: Option<ImageFormat>,
     /// Render only part K of N of the image (K from 0; a fixed split of its tiles, balanced by area)
     /// into a .partial file, for `whitted merge` to combine with the other parts.
     #[arg(long, value_name = "K/N", value_parser = part_of, allow_hyphen_values = true)]
@@ -112,6 +123,11 @@ pub struct ReportArgs {
 }
 
 impl RenderArgs {
+    /// Whether the image goes to standard output (`-o -`).
+    pub fn to_stdout(&self) -> bool {
+        self.output == std::path::Path::new("-")
+    }
+
     /// Whether the output is a `.partial` file (`--partial`, or its name) rather than an image.
     pub fn writes_partial(&self) -> bool {
         self.partial

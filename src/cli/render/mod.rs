@@ -37,7 +37,7 @@ pub enum Ended {
 pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
     let start = Instant::now();
     check_outputs(args)?;
-    let mut scene = load_scene(args.scene.as_deref())?;
+    let mut scene = load_scene(args.scene.as_deref(), args.format)?;
     warn(&scene.warnings);
     let mut plan = Plan::new(args, &mut scene).map_err(Failure::Usage)?;
     // A part's sums cover its tiles only; a whole frame is refused here rather than aborted later, and
@@ -175,6 +175,12 @@ fn interrupted(plan: &Plan, settings: &PartSettings, acc: &Progressive) -> whitt
         ));
         return Ok(Ended::Interrupted);
     }
+    if matches!(plan.target, Target::Stdout { .. }) {
+        note(format!(
+            "whitted: interrupted{by}; nothing written: standard output takes the whole image or none"
+        ));
+        return Ok(Ended::Interrupted);
+    }
     let stop = plan.stop_file();
     let (tiles, all) = (acc.tile_indices().len(), plan.tile_indices().len());
     let image = matches!(plan.target, Target::Image { .. });
@@ -211,10 +217,11 @@ fn interrupted(plan: &Plan, settings: &PartSettings, acc: &Progressive) -> whitt
 /// The error of a write that failed after the passes in `acc` were rendered (a snapshot, the image:
 /// a full disk, a name taken since it was checked), after keeping their sums in an image render's stop
 /// file, so that the work is not lost: the same command with `--resume` goes on from them. (A
-/// `.partial` render's output is its stop file: there is nowhere else to keep them.)
+/// `.partial` render's output is its stop file, and standard output has none: there is nowhere else
+/// to keep them.)
 fn kept(plan: &Plan, settings: &PartSettings, acc: &Progressive, e: whitted::Error) -> whitted::Error {
     let stop = plan.stop_file();
-    if matches!(plan.target, Target::Partial { .. }) || write_sums(plan, settings, acc, &stop).is_err() {
+    if !matches!(plan.target, Target::Image { .. }) || write_sums(plan, settings, acc, &stop).is_err() {
         return e;
     }
     whitted::Error {
@@ -287,7 +294,10 @@ fn summary(plan: &Plan, [loaded, built, rendered]: [Duration; 3], threads: usize
         built.as_secs_f64(),
         plan.accel,
         plan.options.kernel,
-        plan.output.display()
+        match plan.target {
+            Target::Stdout { .. } => "standard output".to_string(),
+            _ => plan.output.display().to_string(),
+        }
     )
 }
 

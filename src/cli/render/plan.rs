@@ -57,6 +57,8 @@ pub enum Target {
     Image { srgb: bool, snapshots: Option<PathBuf> },
     /// A `.partial` file of this part's sums, headed by the render's settings.
     Partial { settings: PartSettings },
+    /// An image on standard output (`-o -`), written once, when whole.
+    Stdout { srgb: bool, format: ImageFormat },
 }
 
 impl Plan {
@@ -166,6 +168,40 @@ fn spp_per_pass(args: &RenderArgs, scene: &Scene) -> (u32, Vec<String>) {
 fn target(args: &RenderArgs, scene: &Scene, options: &Options) -> whitted::Result<Target> {
     let error = |message: &str| Err(whitted::Error::msg(message));
     let partial = args.writes_partial();
+    if args.to_stdout() {
+        // Standard output takes one image, once: nothing beside it, nothing to go on from.
+        let refused = [
+            (
+                partial || args.tiles.is_some() || args.passes_range.is_some(),
+                "a part of a frame (write it to a .partial file)",
+            ),
+            (
+                args.report.heatmap.is_some(),
+                "--heatmap (its files go beside a named output)",
+            ),
+            (
+                args.resume,
+                "--resume (an image on standard output keeps no stop file)",
+            ),
+            (
+                args.every.is_some(),
+                "--every (standard output takes the image once)",
+            ),
+            (
+                args.progressive_out.is_some(),
+                "--progressive-out (snapshots are named after the output)",
+            ),
+        ];
+        if let Some((_, what)) = refused.iter().find(|(given, _)| *given) {
+            return Err(whitted::Error::msg(format!(
+                "-o - writes one image to standard output: it cannot take {what}"
+            )));
+        }
+        return Ok(Target::Stdout {
+            srgb: args.srgb,
+            format: args.output_format.unwrap_or(ImageFormat::Png),
+        });
+    }
     if !partial && (args.tiles.is_some() || args.passes_range.is_some()) {
         return error(
             "--tiles and --passes-range render part of a frame: write it to a .partial file (-o part.partial) and combine the parts with `whitted merge`",
@@ -173,6 +209,9 @@ fn target(args: &RenderArgs, scene: &Scene, options: &Options) -> whitted::Resul
     }
     if partial && args.progressive_out.is_some() {
         return error("--progressive-out writes images; a .partial render cannot keep snapshots");
+    }
+    if args.output_format.is_some() {
+        return error("--output-format is for -o - (standard output): a file's name gives its format");
     }
     Ok(if partial {
         Target::Partial {

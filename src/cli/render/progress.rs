@@ -65,7 +65,7 @@ mod tests {
     fn plan(args: &str) -> Plan {
         let words = std::iter::once("render").chain(args.split_whitespace());
         let render = Render::try_parse_from(words).expect("arguments clap accepts");
-        let mut scene = load_scene(None).expect("the built-in scene");
+        let mut scene = load_scene(None, None).expect("the built-in scene");
         Plan::new(&render.args, &mut scene).expect("a valid plan")
     }
 

@@ -11,11 +11,15 @@ use whitted::render::{Options, spd};
 
 use super::args::RenderArgs;
 use super::plan::{Plan, Target, stop_file};
-use crate::cli::{Failure, outputs};
+use crate::cli::{Failure, console, outputs};
 
 /// Checks every file the render may write, before the scene is loaded: the output, the stop file an
 /// interrupted image render keeps its sums in, and the snapshots of `--progressive-out`.
 pub fn check_outputs(args: &RenderArgs) -> Result<(), Failure> {
+    if args.to_stdout() {
+        // No file: what may go with standard output is the plan's to say.
+        return Ok(());
+    }
     let partial = args.writes_partial();
     outputs::check(&args.output, partial)?;
     let stop = stop_file(&args.output, partial);
@@ -77,6 +81,12 @@ pub fn write(plan: &Plan, acc: &Progressive) -> whitted::Result<()> {
     let (srgb, snapshots) = match &plan.target {
         Target::Partial { settings } => return write_sums(plan, settings, acc, &plan.output),
         Target::Image { srgb, snapshots } => (*srgb, snapshots),
+        Target::Stdout { srgb, format } => {
+            let bytes = image(&plan.options, acc.film())
+                .encoded(*format, *srgb)
+                .map_err(|e| whitted::Error::msg(format!("cannot encode the image: {e}")))?;
+            return console::out_bytes(&bytes);
+        }
     };
     let film = image(&plan.options, acc.film());
     film.write(&plan.output, srgb)?;

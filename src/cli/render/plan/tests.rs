@@ -11,7 +11,7 @@ use crate::cli::setup::load_scene;
 fn plan_and_scene(args: &str) -> (whitted::Result<Plan>, Scene) {
     let words = std::iter::once("render").chain(args.split_whitespace());
     let render = Render::try_parse_from(words).expect("arguments clap accepts");
-    let mut scene = load_scene(render.args.scene.as_deref()).expect("the scene");
+    let mut scene = load_scene(render.args.scene.as_deref(), None).expect("the scene");
     (Plan::new(&render.args, &mut scene), scene)
 }
 
@@ -45,7 +45,7 @@ fn options_take_the_arguments_and_one_side_keeps_the_aspect_ratio() {
     };
     assert_eq!(p.options, expected);
     assert_eq!((plan("--height 30").options.width), 40);
-    assert_eq!(plan("").options, Options::new(&load_scene(None).unwrap()));
+    assert_eq!(plan("").options, Options::new(&load_scene(None, None).unwrap()));
 }
 
 /// `--width`, `--height`, `--spp` and `--fov` are bounded where they are parsed (usage errors); what
@@ -285,7 +285,7 @@ fn the_viewers_render_command_gives_the_views_camera() {
     use whitted::view::state::{Input, Key, Settings, ViewState};
 
     let path = Path::new("scenes/balls_low.p3f");
-    let scene = load_scene(Some(path)).unwrap();
+    let scene = load_scene(Some(path), None).unwrap();
     let options = Options {
         width: 96,
         height: 64,
