@@ -2,13 +2,15 @@
 //! `info`, `bench` and `render --stats` parsed as a script reads them (`cli_report`), full and closed
 //! standard streams and a FIFO for a scene (`console`), every documented
 //! option by a value it must change or keep (`options`), Ctrl-C, SIGTERM and `--resume` (`interrupt`),
-//! what the commands do to the files around them (`files`), and split renders merged (`scale_out`).
+//! what the commands do to the files around them (`files`), split renders merged (`scale_out`), and
+//! the shell completion scripts and man pages (`completions`).
 
 #[path = "../common/mod.rs"]
 mod common;
 
 mod cli_checks;
 mod cli_report;
+mod completions;
 mod console;
 mod files;
 mod heatmap;
