@@ -9,9 +9,11 @@
 //! command (128 + the signal's number, what a shell reports for a process the signal killed).
 
 mod bench;
+mod completions;
 mod console;
 mod frame;
 mod info;
+mod man;
 mod merge;
 mod outputs;
 mod render;
@@ -50,6 +52,11 @@ enum Command {
     /// moves and refined while it stands still (`whitted view --help` lists the keys).
     #[cfg(feature = "view")]
     View(view::ViewArgs),
+    /// Print the completion script of a shell (bash, zsh, fish, powershell or elvish).
+    Completions(completions::CompletionsArgs),
+    /// Print the man page (roff) of the command, or of a subcommand (`whitted man render`):
+    /// `whitted man | man -l -` shows it.
+    Man(man::ManArgs),
 }
 
 /// The exit status of a usage error (clap's).
@@ -101,6 +108,8 @@ pub fn main() -> ExitCode {
             signals::handle(false);
             done(view::run(&args))
         }
+        Command::Completions(args) => done(completions::run(&args)),
+        Command::Man(args) => done(man::run(&args)),
     };
     match result {
         Ok(Ended::Done) => ExitCode::SUCCESS,

@@ -3,13 +3,14 @@
 //! standard streams and a FIFO for a scene (`console`), every documented
 //! option by a value it must change or keep (`options`), Ctrl-C, SIGTERM and `--resume` (`interrupt`),
 //! what the commands do to the files around them (`files`), scenes and images through pipes (`pipes`),
-//! and split renders merged (`scale_out`).
+//! split renders merged (`scale_out`), and the shell completion scripts and man pages (`completions`).
 
 #[path = "../common/mod.rs"]
 mod common;
 
 mod cli_checks;
 mod cli_report;
+mod completions;
 mod console;
 mod files;
 mod heatmap;
