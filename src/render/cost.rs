@@ -6,7 +6,7 @@ use std::str::FromStr;
 
 use serde_json::{Map, Value, json};
 
-use super::heatmap::Heatmap;
+use super::heatmap::{Heatmap, Ramp, Scale, nearest_rank};
 use super::whitted::{RayCounts, RayKind};
 
 /// A per-pixel count of a heatmap.
@@ -95,19 +95,21 @@ impl CostKind {
         }
     }
 
-    /// The heatmap of a `width` x `height` frame's `pixels` (row-major).
-    pub fn heatmap(&self, width: u32, height: u32, pixels: &[RayCounts]) -> Heatmap {
+    /// The heatmap of a `width` x `height` frame's `pixels` (row-major), coloured on `scale`.
+    pub fn heatmap(&self, width: u32, height: u32, pixels: &[RayCounts], scale: Scale) -> Heatmap {
         Heatmap {
             width,
             height,
             values: pixels.iter().map(|r| self.of(r) as f32).collect(),
             what: self.describe(),
+            scale,
         }
     }
 
-    /// The heatmap's summary: what it shows, and for each ray kind and for all of them the mean,
-    /// median, 99th percentile (nearest rank) and largest of this measure over the pixels.
-    pub fn summary(&self, width: u32, height: u32, pixels: &[RayCounts]) -> Value {
+    /// The heatmap's summary: what it shows, for each ray kind and for all of them the mean, median,
+    /// 99th percentile (nearest rank) and largest of this measure over the pixels, and the scale of
+    /// its colours with the count at the top of their bar (`ramp`, the heatmap's).
+    pub fn summary(&self, width: u32, height: u32, pixels: &[RayCounts], ramp: &Ramp) -> Value {
         let mut per_kind = Map::new();
         for (name, kind) in KINDS.iter().map(|(n, k)| (*n, Some(*k))).chain([("all", None)]) {
             let cost = CostKind { rays: kind, ..*self };
@@ -118,6 +120,9 @@ impl CostKind {
             "width": width,
             "height": height,
             "per_pixel": per_kind,
+            "scale": ramp.scale.to_string(),
+            // One of the counts, or 0: a whole number.
+            "scale_top": ramp.top as u64,
         })
     }
 }
@@ -129,7 +134,7 @@ fn stats(mut values: Vec<u64>) -> Value {
     }
     values.sort_unstable();
     let n = values.len();
-    let rank = |p: usize| values[(p * n).div_ceil(100).clamp(1, n) - 1];
+    let rank = |p: u32| values[nearest_rank(n, p)];
     let mean = values.iter().map(|&v| v as f64).sum::<f64>() / n as f64;
     json!({"mean": mean, "median": rank(50), "p99": rank(99), "max": values[n - 1]})
 }
@@ -192,9 +197,14 @@ mod tests {
         );
         assert_eq!(stats(Vec::new())["max"], Value::Null);
         let pixels = vec![r; 4];
-        let summary = k("nodes").summary(2, 2, &pixels);
+        let map = k("nodes").heatmap(2, 2, &pixels, Scale::default());
+        let summary = k("nodes").summary(2, 2, &pixels, &map.ramp());
         assert_eq!(summary["per_pixel"]["shadow"]["max"], 5);
         assert_eq!(summary["per_pixel"]["all"]["median"], 15);
         assert_eq!(summary["measure"], "nodes visited per pixel (all rays)");
+        assert_eq!(
+            (&summary["scale"], &summary["scale_top"]),
+            (&json!("log:p99"), &json!(15))
+        );
     }
 }

@@ -6,10 +6,16 @@
 //! blind readers and in grey; from `colorous::VIRIDIS`, d3-scale-chromatic's copy of the published
 //! 256-entry table, not from colours tuned here.
 //!
+//! Costs are skewed: on the dragon scene the median pixel visits 6 BVH nodes and the costliest 258, so
+//! a linear map to the largest count leaves nearly the whole image in viridis's darkest tenth. The
+//! [`Scale`] says how counts reach the colours: by default log(1 + count), up to the 99th percentile.
+//!
 //! The legend is drawn with the public-domain 8×8 glyphs of `font8x8`: a PNG that says what it counts
-//! and where its scale ends is readable without the command line that made it.
+//! and how its scale runs is readable without the command line that made it.
 
+use std::fmt;
 use std::path::Path;
+use std::str::FromStr;
 
 use glam::Vec3;
 
@@ -23,6 +29,173 @@ pub fn viridis(t: f32) -> [u8; 3] {
     [c.r, c.g, c.b]
 }
 
+/// The index of the `p`th percentile, by nearest rank, among `n` sorted values (`n` at least 1): the
+/// value with `ceil(p * n / 100)` values at or below it.
+pub fn nearest_rank(n: usize, p: u32) -> usize {
+    (p as usize * n).div_ceil(100).clamp(1, n) - 1
+}
+
+/// How a heatmap's counts map to its colour bar: the count itself or log(1 + count), from 0 at the
+/// bottom to the largest count, or to a percentile of the counts, higher counts taking the top colour.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Scale {
+    /// The bar is linear in log(1 + count) rather than in the count.
+    pub log: bool,
+    /// The percentile (1 to 99, nearest rank) at the top of the bar; `None` for the largest count.
+    pub percentile: Option<u32>,
+}
+
+impl Default for Scale {
+    /// `log:p99`. A percentile alone is not enough: on the dragon scene the p99 is 89 nodes and the
+    /// median 6, still in the darkest tenth; the log puts the median at 0.43 of the bar, and the clamp
+    /// keeps a few outliers from squeezing the rest.
+    fn default() -> Self {
+        Scale {
+            log: true,
+            percentile: Some(99),
+        }
+    }
+}
+
+impl FromStr for Scale {
+    type Err = String;
+
+    /// `linear`, `log`, `pNN` or `log:pNN`, NN a whole percentile from 1 to 99.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || {
+            format!(
+                "unknown heatmap scale \"{s}\": expected linear, log, pNN or log:pNN, NN a percentile \
+                 from 1 to 99 (such as p99; the default is log:p99)"
+            )
+        };
+        let (log, top) = match s {
+            "linear" => (false, None),
+            "log" => (true, None),
+            _ => match s.strip_prefix("log:") {
+                Some(top) => (true, Some(top)),
+                None => (false, Some(s)),
+            },
+        };
+        let percentile = match top {
+            None => None,
+            Some(top) => {
+                let digits = top
+                    .strip_prefix('p')
+                    .filter(|d| !d.is_empty() && d.len() <= 2 && d.bytes().all(|b| b.is_ascii_digit()));
+                let p = digits.and_then(|d| d.parse::<u32>().ok());
+                Some(p.filter(|p| (1..=99).contains(p)).ok_or_else(bad)?)
+            }
+        };
+        Ok(Scale { log, percentile })
+    }
+}
+
+impl fmt::Display for Scale {
+    fn fmt(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        match (self.log, self.percentile) {
+            (false, None) => write!(f, "linear"),
+            (true, None) => write!(f, "log"),
+            (false, Some(p)) => write!(f, "p{p}"),
+            (true, Some(p)) => write!(f, "log:p{p}"),
+        }
+    }
+}
+
+/// A [`Scale`] fitted to one map's values: the count at the top of the colour bar.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ramp {
+    /// The scale asked for.
+    pub scale: Scale,
+    /// The scale's percentile of the values, if it has one.
+    pub clamp: Option<f32>,
+    /// The count at the top of the bar: the percentile, or the largest count where there is none or
+    /// it is 0 (fewer than 1 pixel in 100 counts anything: clamped, every counted pixel would take the
+    /// top colour).
+    pub top: f32,
+    /// The largest value.
+    pub max: f32,
+}
+
+impl Ramp {
+    /// `scale` fitted to `values`, non-finite and negative ones counting as 0.
+    pub fn new(scale: Scale, values: &[f32]) -> Ramp {
+        let mut values: Vec<f32> = values
+            .iter()
+            .map(|&v| if v.is_finite() { v.max(0.0) } else { 0.0 })
+            .collect();
+        let max = values.iter().copied().fold(0.0, f32::max);
+        let clamp = scale.percentile.filter(|_| !values.is_empty()).map(|p| {
+            let k = nearest_rank(values.len(), p);
+            *values.select_nth_unstable_by(k, f32::total_cmp).1
+        });
+        let top = clamp.filter(|&c| c > 0.0).unwrap_or(max);
+        Ramp {
+            scale,
+            clamp,
+            top,
+            max,
+        }
+    }
+
+    /// Where `v` lies on the colour bar: 0 at the bottom (non-finite and negative values too), 1 at the
+    /// top and above it.
+    pub fn position(&self, v: f32) -> f32 {
+        let v = if v.is_finite() { v.max(0.0) } else { 0.0 };
+        if self.top <= 0.0 {
+            return 0.0;
+        }
+        let t = if self.scale.log {
+            v.ln_1p() / self.top.ln_1p()
+        } else {
+            v / self.top
+        };
+        t.min(1.0)
+    }
+
+    /// The count at `t` along the bar (0 to 1), the inverse of [`Ramp::position`] below the top.
+    fn count_at(&self, t: f64) -> f64 {
+        let top = f64::from(self.top);
+        if self.scale.log {
+            (t * top.ln_1p()).exp_m1()
+        } else {
+            t * top
+        }
+    }
+
+    /// Whether values above the top take its colour.
+    pub fn clamps(&self) -> bool {
+        self.top < self.max
+    }
+
+    /// The numbers printed under the legend's ticks, the counts at 0, 1/4, 1/2, 3/4 and all of the
+    /// bar: integers as integers, fractions with up to 3 decimals (3 significant digits below 1), those
+    /// inside a log bar to 2 significant digits (its ticks fall between round counts); the top one
+    /// `>=N` where higher counts take its colour.
+    pub fn labels(&self) -> Vec<String> {
+        (0..=4u32)
+            .map(|k| match k {
+                4 if self.clamps() => format!(">={}", format_label(f64::from(self.top))),
+                4 => format_label(f64::from(self.top)),
+                _ if self.scale.log => format_label(significant(self.count_at(f64::from(k) / 4.0), 2)),
+                _ => format_label(self.count_at(f64::from(k) / 4.0)),
+            })
+            .collect()
+    }
+
+    /// The scale in the legend's words: "log scale to p99, max 258".
+    pub fn describe(&self) -> String {
+        let curve = if self.scale.log { "log" } else { "linear" };
+        match (self.scale.percentile, self.clamp) {
+            (Some(p), Some(c)) if c > 0.0 && self.clamps() => {
+                format!("{curve} scale to p{p}, max {}", format_label(f64::from(self.max)))
+            }
+            (Some(p), Some(c)) if c > 0.0 => format!("{curve} scale to p{p} (the max)"),
+            (Some(p), _) => format!("{curve} scale to the max (p{p} is 0)"),
+            (None, _) => format!("{curve} scale to the max"),
+        }
+    }
+}
+
 /// Per-pixel costs of one frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Heatmap {
@@ -34,6 +207,8 @@ pub struct Heatmap {
     pub values: Vec<f32>,
     /// What the values are, printed in the legend: "BVH nodes tested per pixel", say.
     pub what: String,
+    /// How the values map to colours.
+    pub scale: Scale,
 }
 
 /// The legend's background, also the padding beside an image too narrow for the legend's text: a
@@ -43,15 +218,15 @@ const BACKGROUND: [u8; 3] = [64, 64, 64];
 /// The legend's text and tick marks.
 const INK: [u8; 3] = [240, 240, 240];
 
-/// The legend's vertical layout in font pixels (one font pixel is `scale` image pixels): margin, colour
-/// bar, ticks, gap, numbers, gap, label, margin.
+/// The legend's vertical layout in font pixels (one font pixel is `s` image pixels): margin, colour
+/// bar, ticks, gap, numbers, gap, what is counted, gap, the scale, margin.
 const MARGIN: u32 = 4;
 const BAR: u32 = 12;
 const TICK: u32 = 4;
 const GAP: u32 = 2;
 const GLYPH: u32 = 8;
 const LINE_GAP: u32 = 4;
-const LEGEND_HEIGHT: u32 = MARGIN + BAR + TICK + GAP + GLYPH + LINE_GAP + GLYPH + MARGIN;
+const LEGEND_HEIGHT: u32 = MARGIN + BAR + TICK + GAP + 3 * GLYPH + 2 * LINE_GAP + MARGIN;
 /// The narrowest colour bar, in font pixels: narrower and the ramp is a few blocks.
 const MIN_BAR: u32 = 64;
 /// Images wider than this get the legend's font at twice the size, so that it stays legible when the
@@ -59,29 +234,16 @@ const MIN_BAR: u32 = 64;
 const LARGE_IMAGE: u32 = 800;
 
 impl Heatmap {
-    /// The largest finite value, or 0 when there is none above 0: the top of the map.
-    pub fn max(&self) -> f32 {
-        self.values
-            .iter()
-            .copied()
-            .filter(|v| v.is_finite())
-            .fold(0.0, f32::max)
+    /// The map's [`Scale`] fitted to its values.
+    pub fn ramp(&self) -> Ramp {
+        Ramp::new(self.scale, &self.values)
     }
 
-    /// The numbers printed under the legend's ticks, at 0, 1/4, 1/2, 3/4 and all of [`Heatmap::max`]:
-    /// integers as integers, fractions with up to 3 decimals (3 significant digits below 1).
-    pub fn legend_labels(&self) -> Vec<String> {
-        let max = f64::from(self.max());
-        (0..=4u32)
-            .map(|k| format_label(max * f64::from(k) / 4.0))
-            .collect()
-    }
-
-    /// Writes the map in false colour (viridis, linear from 0 at the bottom to [`Heatmap::max`] at the
-    /// top; non-finite and negative values count as 0) with a legend strip below it: the colour ramp,
-    /// ticks and numbers at 0, 1/4, 1/2, 3/4 and the maximum, and [`Heatmap::what`]. An image too
-    /// narrow for the legend is centred on a wider canvas. `path` must name a `.png` file; it is
-    /// written atomically, with an sRGB chunk (viridis's colours are sRGB), by the film's PNG writer.
+    /// Writes the map in false colour (viridis along the [`Heatmap::ramp`]) with a legend strip below
+    /// it: the colour bar, ticks and numbers at 0, 1/4, 1/2, 3/4 and its top, [`Heatmap::what`], and
+    /// the scale ([`Ramp::describe`]). An image too narrow for the legend is centred on a wider canvas.
+    /// `path` must name a `.png` file; it is written atomically, with an sRGB chunk (viridis's colours
+    /// are sRGB), by the film's PNG writer.
     pub fn write_png(&self, path: &Path) -> Result<()> {
         self.check(path, ImageFormat::Png, "png")?;
         let (width, height, rgb) = self.to_rgb8();
@@ -137,7 +299,9 @@ impl Heatmap {
     /// The image and its legend, below it on a canvas wide enough for it, or over its bottom rows.
     fn draw(&self, overlay: bool) -> (u32, u32, Vec<[u8; 3]>) {
         let s = if self.width > LARGE_IMAGE { 2 } else { 1 };
-        let labels = self.legend_labels();
+        let ramp = self.ramp();
+        let labels = ramp.labels();
+        let scale = ramp.describe();
         let margin = MARGIN * s;
         let glyph = GLYPH * s;
         let text_width = |t: &str| t.chars().count() as u32 * glyph;
@@ -160,7 +324,8 @@ impl Heatmap {
             let width = self
                 .width
                 .max(bar_width + 2 * margin)
-                .max(text_width(&self.what) + 2 * margin);
+                .max(text_width(&self.what) + 2 * margin)
+                .max(text_width(&scale) + 2 * margin);
             (width, self.height + LEGEND_HEIGHT * s, self.height)
         };
         let mut canvas = Canvas {
@@ -170,16 +335,14 @@ impl Heatmap {
         };
 
         // The image, centred.
-        let max = self.max();
         let x0 = (width - self.width) / 2;
         for (y, row) in self.values.chunks_exact(self.width as usize).enumerate() {
             for (x, &v) in row.iter().enumerate() {
-                let t = if max > 0.0 && v.is_finite() { v / max } else { 0.0 };
-                canvas.set(x0 + x as u32, y as u32, viridis(t));
+                canvas.set(x0 + x as u32, y as u32, viridis(ramp.position(v)));
             }
         }
 
-        // The colour bar, its ticks, their numbers, and the label (over a strip of background).
+        // The colour bar, its ticks, their numbers, and the labels (over a strip of background).
         canvas.fill(0, legend_y, width, LEGEND_HEIGHT * s, BACKGROUND);
         let bar_x = margin;
         let bar_width = width.saturating_sub(2 * margin).max(1);
@@ -206,7 +369,10 @@ impl Heatmap {
             canvas.text(x, y + (TICK + GAP) * s, s, label);
         }
         y += (TICK + GAP + GLYPH + LINE_GAP) * s;
-        canvas.text((width - text_width(&self.what)) / 2, y, s, &self.what);
+        for line in [&self.what, &scale] {
+            canvas.text(width.saturating_sub(text_width(line)) / 2, y, s, line);
+            y += (GLYPH + LINE_GAP) * s;
+        }
         (width, height, canvas.pixels)
     }
 }
@@ -250,6 +416,15 @@ impl Canvas {
             }
         }
     }
+}
+
+/// `v` rounded to `digits` significant digits.
+fn significant(v: f64, digits: i32) -> f64 {
+    if v == 0.0 || !v.is_finite() {
+        return v;
+    }
+    let scale = 10f64.powi(digits - 1 - v.abs().log10().floor() as i32);
+    (v * scale).round() / scale
 }
 
 /// A legend number: an integer as one; otherwise rounded to 3 decimals, or to 3 significant digits
@@ -306,6 +481,12 @@ mod tests {
         assert_eq!(viridis(7.0), viridis(1.0));
     }
 
+    const LINEAR: Scale = Scale {
+        log: false,
+        percentile: None,
+    };
+
+    /// A map of rows running from 0 to `max`, on the linear scale.
     fn gradient(width: u32, height: u32, max: f32, what: &str) -> Heatmap {
         let values = (0..height)
             .flat_map(|_| (0..width).map(move |x| max * x as f32 / (width - 1).max(1) as f32))
@@ -315,6 +496,155 @@ mod tests {
             height,
             values,
             what: what.into(),
+            scale: LINEAR,
+        }
+    }
+
+    /// A one-row map of `values`, on `scale`.
+    fn row(values: Vec<f32>, scale: Scale) -> Heatmap {
+        Heatmap {
+            width: values.len() as u32,
+            height: 1,
+            values,
+            what: "x".into(),
+            scale,
+        }
+    }
+
+    fn scale(s: &str) -> Scale {
+        s.parse().unwrap()
+    }
+
+    #[test]
+    fn scales_parse_print_and_refuse_with_the_accepted_forms() {
+        for (text, log, percentile) in [
+            ("linear", false, None),
+            ("log", true, None),
+            ("p99", false, Some(99)),
+            ("p1", false, Some(1)),
+            ("log:p95", true, Some(95)),
+        ] {
+            assert_eq!(scale(text), Scale { log, percentile }, "{text}");
+            assert_eq!(scale(text).to_string(), text);
+        }
+        assert_eq!(Scale::default().to_string(), "log:p99");
+        for bad in [
+            "",
+            "p",
+            "p0",
+            "p100",
+            "p+5",
+            "p9.5",
+            "99",
+            "log:",
+            "log:linear",
+            "logp99",
+            "Linear",
+        ] {
+            let e = bad.parse::<Scale>().unwrap_err();
+            assert!(
+                e.starts_with(&format!(
+                    "unknown heatmap scale \"{bad}\": expected linear, log, pNN or log:pNN"
+                )),
+                "{e}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_percentile_scale_ends_at_the_nearest_rank_and_clamps_above_it() {
+        // 1..=100: the nearest-rank p99 is 99, the 99th value; only 100 lies above it.
+        let map = row((1..=100).map(|v| v as f32).collect(), scale("p99"));
+        let ramp = map.ramp();
+        assert_eq!((ramp.clamp, ramp.top, ramp.max), (Some(99.0), 99.0, 100.0));
+        assert!(ramp.clamps());
+        assert_eq!(ramp.position(49.5), 0.5);
+        assert_eq!(ramp.position(99.0), 1.0);
+        assert_eq!(ramp.position(100.0), 1.0);
+        assert_eq!(ramp.labels(), ["0", "24.75", "49.5", "74.25", ">=99"]);
+        assert_eq!(ramp.describe(), "linear scale to p99, max 100");
+        // 990 pixels at 10 and 10 at 1000: the p99 is 10, the costly tenth of a percent is clamped.
+        let values = [vec![10.0; 990], vec![1000.0; 10]].concat();
+        let ramp = row(values, scale("p99")).ramp();
+        assert_eq!(
+            (ramp.top, ramp.position(5.0), ramp.position(1000.0)),
+            (10.0, 0.5, 1.0)
+        );
+        // The median of 1, 2, 3, 4: the 2nd value.
+        assert_eq!(row(vec![4.0, 3.0, 2.0, 1.0], scale("p50")).ramp().top, 2.0);
+        // Where the percentile is the max, nothing is clamped and the top is a plain number.
+        let ramp = row(vec![7.0; 10], scale("p99")).ramp();
+        assert!(!ramp.clamps());
+        assert_eq!(ramp.labels()[4], "7");
+        assert_eq!(ramp.describe(), "linear scale to p99 (the max)");
+        // A percentile of 0 would draw every counted pixel at the top: the bar ends at the max.
+        let values = [vec![0.0; 995], vec![7.0; 5]].concat();
+        let ramp = row(values, scale("p99")).ramp();
+        assert_eq!((ramp.clamp, ramp.top), (Some(0.0), 7.0));
+        assert_eq!(ramp.describe(), "linear scale to the max (p99 is 0)");
+        assert_eq!(nearest_rank(100, 99), 98);
+        assert_eq!(nearest_rank(1000, 50), 499);
+        assert_eq!(nearest_rank(1, 1), 0);
+    }
+
+    #[test]
+    fn a_log_scale_is_linear_in_log_of_one_plus_the_count() {
+        // To the max 99: log(1 + 9) is half of log(1 + 99), 10^(1/2) - 1 a quarter, 10^(3/2) - 1
+        // three quarters.
+        let map = row(vec![0.0, 9.0, 99.0], scale("log"));
+        let ramp = map.ramp();
+        assert_eq!((ramp.top, ramp.position(0.0)), (99.0, 0.0));
+        assert!((ramp.position(9.0) - 0.5).abs() < 1e-6);
+        assert_eq!(ramp.position(99.0), 1.0);
+        assert_eq!(ramp.labels(), ["0", "2.2", "9", "31", "99"]);
+        assert_eq!(ramp.describe(), "log scale to the max");
+        // Clamped at the p50 of 0, 3, 9, 99: 3, whose log(1 + 3) is twice log(1 + 1).
+        let map = row(vec![0.0, 3.0, 9.0, 99.0], scale("log:p50"));
+        let ramp = map.ramp();
+        assert_eq!(ramp.top, 3.0);
+        assert!((ramp.position(1.0) - 0.5).abs() < 1e-6);
+        assert_eq!((ramp.position(9.0), ramp.position(99.0)), (1.0, 1.0));
+        assert_eq!(ramp.labels(), ["0", "0.41", "1", "1.8", ">=3"]);
+        assert_eq!(ramp.describe(), "log scale to p50, max 99");
+    }
+
+    #[test]
+    fn the_linear_scale_runs_from_0_to_the_max() {
+        let map = row(vec![0.0, 25.0, 40.0, 100.0, f32::NAN, -3.0], LINEAR);
+        let ramp = map.ramp();
+        assert_eq!((ramp.clamp, ramp.top, ramp.max), (None, 100.0, 100.0));
+        assert!(!ramp.clamps());
+        let at = |v: f32| ramp.position(v);
+        assert_eq!([at(0.0), at(25.0), at(40.0), at(100.0)], [0.0, 0.25, 0.4, 1.0]);
+        assert_eq!([at(f32::NAN), at(-3.0), at(f32::INFINITY)], [0.0; 3]);
+        assert_eq!(ramp.labels(), ["0", "25", "50", "75", "100"]);
+        assert_eq!(ramp.describe(), "linear scale to the max");
+    }
+
+    /// The PNG's pixels are viridis at the ramp's positions: of 10, 20, 30, 40 on a p50 scale (20),
+    /// half way, then the top; on the default scale (to 40), log(1 + count) / log(41) of the way.
+    #[test]
+    fn the_png_is_coloured_along_the_ramp() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("r.png");
+        let log = |v: f32| (1.0 + v).ln() / 41f32.ln();
+        for (s, want) in [
+            ("p50", [0.5, 1.0, 1.0, 1.0]),
+            ("log:p99", [log(10.0), log(20.0), log(30.0), 1.0]),
+        ] {
+            let map = row(vec![10.0, 20.0, 30.0, 40.0], scale(s));
+            map.write_png(&path).unwrap();
+            let img = image::open(&path).unwrap().to_rgb8();
+            let x0 = (img.width() - 4) / 2;
+            let ramp = map.ramp();
+            for (x, (&v, t)) in map.values.iter().zip(want).enumerate() {
+                assert!((ramp.position(v) - t).abs() < 1e-6, "{s}, {v}");
+                assert_eq!(
+                    img.get_pixel(x0 + x as u32, 0).0,
+                    viridis(ramp.position(v)),
+                    "{s}, {v}"
+                );
+            }
         }
     }
 
@@ -333,7 +663,7 @@ mod tests {
         assert_eq!(format_label(0.001_234_5), "0.00123");
         assert_eq!(format_label(0.999_96), "1");
         let map = gradient(5, 1, 1234.0, "nodes");
-        assert_eq!(map.legend_labels(), ["0", "308.5", "617", "925.5", "1234"]);
+        assert_eq!(map.ramp().labels(), ["0", "308.5", "617", "925.5", "1234"]);
     }
 
     #[test]
@@ -347,16 +677,16 @@ mod tests {
         let exr_max = read_exr_max(&exr);
         assert_eq!(exr_max, 5000.0);
         assert_eq!(
-            map.legend_labels().last().unwrap(),
+            map.ramp().labels().last().unwrap(),
             &format!("{}", exr_max as u64)
         );
         // A mean over samples: the label is the max to 3 decimals.
         let map = gradient(8, 8, 3.141_73, "primitive tests per pixel (shadow rays)");
         let exr = dir.path().join("mean.exr");
         map.write_exr(&exr).unwrap();
-        let label: f32 = map.legend_labels().last().unwrap().parse().unwrap();
+        let label: f32 = map.ramp().labels().last().unwrap().parse().unwrap();
         assert!((label - read_exr_max(&exr)).abs() <= 0.0005, "{label}");
-        assert_eq!(map.legend_labels().last().unwrap(), "3.142");
+        assert_eq!(map.ramp().labels().last().unwrap(), "3.142");
     }
 
     #[test]
@@ -394,6 +724,7 @@ mod tests {
             height: h,
             values,
             what: "x".into(),
+            scale: LINEAR,
         };
         map.write_png(&path).unwrap();
         let img = image::open(&path).unwrap().to_rgb8();
@@ -411,7 +742,7 @@ mod tests {
         let bar_y = h + MARGIN + BAR / 2;
         assert_eq!(img.get_pixel(MARGIN, bar_y).0, viridis(0.0));
         assert_eq!(img.get_pixel(img.width() - MARGIN - 1, bar_y).0, viridis(1.0));
-        assert_eq!(map.legend_labels(), ["0", "19.25", "38.5", "57.75", "77"]);
+        assert_eq!(map.ramp().labels(), ["0", "19.25", "38.5", "57.75", "77"]);
     }
 
     #[test]
@@ -423,9 +754,10 @@ mod tests {
             height: 30,
             values: vec![0.0; 1200],
             what: "primitive tests per pixel".into(),
+            scale: Scale::default(),
         };
         map.write_png(&path).unwrap();
-        assert_eq!(map.legend_labels(), ["0"; 5]);
+        assert_eq!(map.ramp().labels(), ["0"; 5]);
         let img = image::open(&path).unwrap().to_rgb8();
         let x0 = (img.width() - 40) / 2;
         for y in 0..30 {
@@ -450,6 +782,7 @@ mod tests {
             let what = "BVH nodes tested per pixel";
             let mut map = gradient(w, h, 12345.0, what);
             map.values[0] = 12345.0;
+            map.scale = Scale::default();
             let path = dir.path().join(format!("{w}x{h}.png"));
             map.write_png(&path).unwrap();
             let img = image::open(&path).unwrap().to_rgb8();
@@ -460,15 +793,15 @@ mod tests {
                 "{}",
                 img.width()
             );
-            let numbers: u32 = map.legend_labels().iter().map(|l| l.len() as u32 * GLYPH).sum();
+            let numbers: u32 = map.ramp().labels().iter().map(|l| l.len() as u32 * GLYPH).sum();
             assert!(img.width() >= numbers + 2 * MARGIN, "{}", img.width());
-            // Ticks, numbers and the label are drawn, each its own band of rows.
+            // Ticks, numbers, the label and the scale are drawn, each its own band of rows.
             let rows = text_rows(&img, h + MARGIN + BAR);
-            assert!(rows.len() >= TICK as usize + 2 * 6, "{rows:?}");
+            assert!(rows.len() >= TICK as usize + 3 * 6, "{rows:?}");
             assert_eq!(
                 *rows.last().unwrap(),
                 h + LEGEND_HEIGHT - MARGIN - 1,
-                "the label's descenders"
+                "the descenders of the scale's \"p99\""
             );
         }
     }

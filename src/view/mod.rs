@@ -29,6 +29,7 @@ use crate::render::RayCounts;
 use crate::render::cost::CostKind;
 use crate::render::env::Background;
 use crate::render::film::{Film, to_u8};
+use crate::render::heatmap::Scale;
 use crate::render::progressive::Progressive;
 use crate::render::{Options, Renderer};
 use crate::scene::Scene;
@@ -189,7 +190,7 @@ pub(crate) fn render_loop(
         let film = sums.film();
         let heatmap = job.heatmap.zip(sums.pixel_rays()).map(|(measure, rays)| {
             let kind = CostKind { measure, rays: None };
-            let map = kind.heatmap(job.options.width, job.options.height, rays);
+            let map = kind.heatmap(job.options.width, job.options.height, rays, Scale::default());
             map.overlaid().into_iter().map(packed).collect()
         });
         let pixels = heatmap.unwrap_or_else(|| film.pixels.iter().map(|&c| word(c, srgb)).collect());
@@ -380,7 +381,7 @@ mod tests {
             measure: Measure::Nodes,
             rays: None,
         }
-        .heatmap(48, 64, sums.pixel_rays().unwrap());
+        .heatmap(48, 64, sums.pixel_rays().unwrap(), Scale::default());
         assert_eq!(frame.pixels[0], packed(map.overlaid()[0]));
         assert_ne!(frame.pixels[0], word(frame.film.pixels[0], false));
     }

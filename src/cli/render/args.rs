@@ -9,6 +9,7 @@ use crate::cli::report::Format;
 use crate::cli::values::{non_negative, positive, whole};
 use whitted::render::cost::CostKind;
 use whitted::render::film::ImageFormat;
+use whitted::render::heatmap::Scale;
 
 /// Arguments of `whitted render`.
 #[derive(Args)]
@@ -111,6 +112,12 @@ pub struct ReportArgs {
     /// OUT.heatmap.json (mean, median, p99 and max per ray kind).
     #[arg(long, value_name = "KIND")]
     pub heatmap: Option<CostKind>,
+    /// With --heatmap: how counts map to the colours of OUT.heatmap.png, from 0 at the bottom of the
+    /// colour bar: `log:p99` (the default) log(1 + count) up to the 99th percentile of the counts
+    /// (nearest rank), higher counts in the top colour; `log` up to the largest count; `p99`, `p95`,
+    /// ... (`pNN`, 1 to 99) the count itself up to that percentile; `linear` up to the largest count.
+    #[arg(long, value_name = "SCALE", requires = "heatmap")]
+    pub heatmap_scale: Option<Scale>,
     /// With --stats: also count the nodes visited and primitives tested by each ray, and report their
     /// means per ray kind (counting makes the render slower; its times are the counted render's).
     #[arg(long, requires = "stats")]

@@ -98,8 +98,8 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
     }
     let rendered = render_start.elapsed();
     write(&plan, &acc).map_err(|e| kept(&plan, &settings, &acc, e))?;
-    if let Some(kind) = plan.heatmap {
-        write_heatmap(&plan, kind, &acc)?;
+    if let Some((kind, scale)) = plan.heatmap {
+        write_heatmap(&plan, kind, scale, &acc)?;
     }
     if matches!(plan.target, Target::Image { .. }) {
         // The image is whole: the sums it was resumed from are spent, as is a stop file --resume

@@ -10,6 +10,7 @@ use whitted::accel::{AccelKind, BuildOptions};
 use whitted::parts::partial::PartSettings;
 use whitted::render::cost::CostKind;
 use whitted::render::film::ImageFormat;
+use whitted::render::heatmap::Scale;
 use whitted::render::progressive::Progressive;
 use whitted::render::{Options, tiles};
 use whitted::scene::Scene;
@@ -41,8 +42,9 @@ pub struct Plan {
     pub target: Target,
     /// Go on from what an interrupted run of the same render wrote (`--resume`).
     pub resume: bool,
-    /// The cost heatmap to write beside the output (`--heatmap`).
-    pub heatmap: Option<CostKind>,
+    /// The cost heatmap to write beside the output (`--heatmap`) and the scale of its colours
+    /// (`--heatmap-scale`).
+    pub heatmap: Option<(CostKind, Scale)>,
     /// What the arguments asked for that is not done, for the user to see.
     pub warnings: Vec<String>,
     /// No progress bar or summary.
@@ -225,13 +227,14 @@ fn target(args: &RenderArgs, scene: &Scene, options: &Options) -> whitted::Resul
     })
 }
 
-/// `--heatmap`, which counts the rays of one run: it cannot go on from an earlier one's sums.
-fn heatmap(args: &RenderArgs) -> whitted::Result<Option<CostKind>> {
+/// `--heatmap`, which counts the rays of one run: it cannot go on from an earlier one's sums; and its
+/// `--heatmap-scale`, the viewer's by default.
+fn heatmap(args: &RenderArgs) -> whitted::Result<Option<(CostKind, Scale)>> {
     match args.report.heatmap {
         Some(_) if args.resume => Err(whitted::Error::msg(
             "--heatmap counts the rays of one whole run: it cannot go on from an earlier run (--resume)",
         )),
-        kind => Ok(kind),
+        kind => Ok(kind.map(|k| (k, args.report.heatmap_scale.unwrap_or_default()))),
     }
 }
 

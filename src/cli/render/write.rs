@@ -6,6 +6,7 @@ use whitted::files::{check_writable, write_atomically};
 use whitted::parts::partial::{Part, PartSettings};
 use whitted::render::cost::CostKind;
 use whitted::render::film::Film;
+use whitted::render::heatmap::Scale;
 use whitted::render::progressive::Progressive;
 use whitted::render::{Options, spd};
 
@@ -60,15 +61,16 @@ pub fn heatmap_paths(output: &Path) -> [PathBuf; 3] {
     ["png", "exr", "json"].map(|ext| output.with_extension(format!("heatmap.{ext}")))
 }
 
-/// Writes the heatmap `kind` of the passes in `acc` beside the output.
-pub fn write_heatmap(plan: &Plan, kind: CostKind, acc: &Progressive) -> whitted::Result<()> {
+/// Writes the heatmap `kind` of the passes in `acc`, coloured on `scale`, beside the output.
+pub fn write_heatmap(plan: &Plan, kind: CostKind, scale: Scale, acc: &Progressive) -> whitted::Result<()> {
     let (w, h) = acc.size();
     let pixels = acc.pixel_rays().expect("a heatmap's render counts its steps");
     let [png, exr, json] = heatmap_paths(&plan.output);
-    let map = kind.heatmap(w, h, pixels);
+    let map = kind.heatmap(w, h, pixels, scale);
     map.write_png(&png)?;
     map.write_exr(&exr)?;
-    let mut text = serde_json::to_string_pretty(&kind.summary(w, h, pixels)).expect("JSON of plain values");
+    let summary = kind.summary(w, h, pixels, &map.ramp());
+    let mut text = serde_json::to_string_pretty(&summary).expect("JSON of plain values");
     text.push('\n');
     write_atomically(&json, |file| {
         std::io::Write::write_all(file, text.as_bytes()).map_err(|e| e.to_string())
