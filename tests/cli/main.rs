@@ -3,7 +3,8 @@
 //! standard streams and a FIFO for a scene (`console`), every documented
 //! option by a value it must change or keep (`options`), Ctrl-C, SIGTERM and `--resume` (`interrupt`),
 //! what the commands do to the files around them (`files`), scenes and images through pipes (`pipes`),
-//! split renders merged (`scale_out`), and the shell completion scripts and man pages (`completions`).
+//! split renders merged (`scale_out`), docs/scale-out.md's job array on a Slurm the test starts
+//! (`slurm`), and the shell completion scripts and man pages (`completions`).
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -18,3 +19,4 @@ mod interrupt;
 mod options;
 mod pipes;
 mod scale_out;
+mod slurm;

@@ -276,7 +276,7 @@ fn render_checks_the_split_and_resumes() {
 }
 
 /// The ```bash block after `<!-- recipe: NAME -->` in docs/scale-out.md.
-fn recipe(name: &str) -> String {
+pub(crate) fn recipe(name: &str) -> String {
     let doc = std::fs::read_to_string(root().join("docs/scale-out.md")).unwrap();
     let marker = format!("<!-- recipe: {name} -->");
     let after = &doc[doc.find(&marker).unwrap_or_else(|| panic!("no {marker}")) + marker.len()..];
