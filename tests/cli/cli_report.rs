@@ -6,7 +6,12 @@
 use std::collections::BTreeSet;
 use std::process::Command;
 
+use glam::Vec3;
 use serde_json::Value;
+use whitted::accel::bvh2::{INTERSECTION_COST, TRAVERSAL_COST};
+use whitted::accel::quality::{TreeView, clipped_area};
+use whitted::accel::{Accel, AccelKind, BuildOptions, PrimKind, Prims};
+use whitted::kit::rays::TestRng;
 
 use crate::common::{self, int, json, root, stdout, usage_failure, whitted};
 
@@ -208,9 +213,15 @@ fn info_json_with_a_bvh_gives_the_trees_shape() {
         ]);
         let epo = float(&v["accel"]["epo_cost"]);
         assert!(epo.is_finite() && epo >= 0.0, "{kind}: {epo}");
+        // Measured exactly: no sample, and null rather than a missing key.
+        assert_eq!(v["accel"]["epo_sampled"], Value::Null, "{kind}");
+        assert_eq!(
+            keys(&v["accel"]),
+            set(&[&documented[..], &["epo_cost", "epo_sampled"]].concat())
+        );
         let text = stdout(&["info", "--accel", kind, "--epo", "scenes/spd/tetra_default.nff"]);
         assert!(
-            text.contains("\nleaf depths   ") && text.contains("\nEPO cost      "),
+            text.contains("\nleaf depths   ") && text.contains(&format!("\nEPO cost      {epo:.2}\n")),
             "{text}"
         );
     }
@@ -223,6 +234,77 @@ fn info_json_with_a_bvh_gives_the_trees_shape() {
         "whitted: --epo measures a BVH: it needs --accel bvh2, bvh4 or bvh8\n"
     );
     common::fails(&["info", "--epo", "scenes/spd/tetra_default.nff"], 2);
+}
+
+/// 100,000 large random triangles in a unit cube cross one another's boxes everywhere: measured node
+/// by node, their EPO would take most of an hour, so `info --epo` estimates it from a sample of
+/// triangles and says so, in JSON and in text, with the same figures each run. The estimate agrees
+/// with one worked out from the definition over another sample of triangles of the same tree.
+#[test]
+fn info_epo_estimates_a_soup_of_large_triangles() {
+    const N: usize = 100_000;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("soup.obj");
+    let mut rng = TestRng::new(11);
+    let mut obj = String::new();
+    for _ in 0..3 * N {
+        let p = rng.vec3(0.0, 1.0);
+        obj += &format!("v {} {} {}\n", p.x, p.y, p.z);
+    }
+    for i in 0..N {
+        obj += &format!("f {} {} {}\n", 3 * i + 1, 3 * i + 2, 3 * i + 3);
+    }
+    std::fs::write(&path, obj).unwrap();
+    let file = path.to_str().unwrap();
+    let v = json(&["info", "--json", "--accel", "bvh8", "--epo", file]);
+    let (epo, k) = (float(&v["accel"]["epo_cost"]), int(&v["accel"]["epo_sampled"]));
+    assert!((100..N as u64).contains(&k), "{k}");
+    let text = stdout(&["info", "--accel", "bvh8", "--epo", file]);
+    let line = format!("\nEPO cost      {epo:.2} (estimated from {k} of {N} triangles)\n");
+    assert!(text.contains(&line), "{text}");
+
+    // The same tree, and for each triangle drawn, every node that does not hold it: its cost × the
+    // triangle's area in its box.
+    let scene = whitted::scene::load(&path).unwrap();
+    let prims = Prims::new(&scene);
+    let Ok(Accel::Bvh8(bvh)) = Accel::try_build_with(prims, AccelKind::Bvh8, BuildOptions::DEFAULT) else {
+        panic!("no BVH8")
+    };
+    let view = TreeView::from(&bvh);
+    let (mut parent, mut leaf) = (vec![None; view.nodes.len()], vec![0; N]);
+    for (i, node) in view.nodes.iter().enumerate() {
+        node.children.iter().for_each(|&c| parent[c as usize] = Some(i));
+        for &id in &node.prims {
+            let PrimKind::Triangle(t) = prims.kind(id) else {
+                panic!("{id}")
+            };
+            leaf[t] = i;
+        }
+    }
+    let area = |[a, b, c]: [Vec3; 3]| f64::from((b - a).cross(c - a).length()) / 2.0;
+    let total: f64 = (0..N).map(|t| area(scene.triangles.vertices(t))).sum();
+    const DRAWN: usize = 128;
+    let mut sum = 0.0;
+    for _ in 0..DRAWN {
+        let t = rng.below(N);
+        let mut holds = vec![false; view.nodes.len()];
+        let mut at = Some(leaf[t]);
+        while let Some(i) = at {
+            holds[i] = true;
+            at = parent[i];
+        }
+        for (node, _) in view.nodes.iter().zip(holds).filter(|(_, h)| !h) {
+            let cost = if node.children.is_empty() {
+                f64::from(INTERSECTION_COST) * node.prims.len() as f64
+            } else {
+                f64::from(TRAVERSAL_COST)
+            };
+            sum += cost * clipped_area(scene.triangles.vertices(t), &node.bounds);
+        }
+    }
+    let want = sum / DRAWN as f64 * N as f64 / total;
+    // Both are estimates: a fifth is over three standard errors of their difference.
+    assert!(close(epo, want, 0.2), "{epo} against {want}");
 }
 
 #[test]
