@@ -178,9 +178,7 @@ fn a_failing_stderr_never_costs_the_image() {
 fn a_fifo_as_the_scene_is_refused_at_once() {
     let dir = tempfile::tempdir().unwrap();
     let fifo = dir.path().join("f.p3f");
-    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
-    // SAFETY: a valid NUL-terminated path.
-    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0, "mkfifo");
+    common::mkfifo(&fifo);
     // A writer that opens the FIFO and closes it at once: a reader that opened it (the old
     // behaviour) reads an empty file and finishes, so neither answer can hang the test. The opening
     // blocks until a reader comes; the test is that reader at the end if the command never was.

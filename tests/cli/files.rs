@@ -6,7 +6,6 @@
 
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
 
 use crate::common;
 
@@ -187,24 +186,15 @@ fn merge_refuses_a_fifo_part_without_waiting() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let fifo = d.join("p.partial");
-    let c = std::ffi::CString::new(fifo.as_os_str().as_encoded_bytes()).unwrap();
-    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
-    let mut child = Command::new(env!("CARGO_BIN_EXE_whitted"))
+    common::mkfifo(&fifo);
+    let child = Command::new(env!("CARGO_BIN_EXE_whitted"))
         .arg("merge")
         .arg(d.join("m.png"))
         .arg(&fifo)
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(60) {
-            child.kill().unwrap();
-            panic!("merge waited on the FIFO");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let err = common::failed(&child.wait_with_output().unwrap(), 1);
+    let err = common::failed(&common::wait_a_minute(child, "merge of a FIFO"), 1);
     assert_eq!(
         err,
         format!(

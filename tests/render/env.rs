@@ -334,8 +334,7 @@ fn a_course_scene_renders_its_sky() {
 /// a minute: what it is given here must neither hang it nor let it take the machine's memory.
 fn whitted_bounded(kib: u64, args: &[&str]) -> std::process::Output {
     use std::process::{Command, Stdio};
-    use std::time::{Duration, Instant};
-    let mut child = Command::new("sh")
+    let child = Command::new("sh")
         .arg("-c")
         .arg(format!("ulimit -v {kib} && exec \"$0\" \"$@\""))
         .arg(env!("CARGO_BIN_EXE_whitted"))
@@ -344,19 +343,7 @@ fn whitted_bounded(kib: u64, args: &[&str]) -> std::process::Output {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(60) {
-            child.kill().unwrap();
-            let out = child.wait_with_output().unwrap();
-            panic!(
-                "whitted {args:?} still ran after a minute: {}",
-                String::from_utf8_lossy(&out.stderr)
-            );
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    child.wait_with_output().unwrap()
+    common::wait_a_minute(child, &format!("whitted {args:?}"))
 }
 
 /// A scene of nothing but the skybox `sky` and the background colour 0.2 0.4 0.6, 32 x 24 pixels.
@@ -409,9 +396,7 @@ fn a_face_that_is_not_a_regular_file_is_refused_at_once() {
     let dir = sky_folder();
     let png = dir.path().join("sky/right.png");
     std::fs::remove_file(&png).unwrap();
-    let c = std::ffi::CString::new(png.to_str().unwrap()).unwrap();
-    // SAFETY: a valid NUL-terminated path.
-    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0, "mkfifo");
+    common::mkfifo(&png);
     renders_the_background_colour(dir.path(), 2_000_000, "right.png", not_regular);
 
     // A .jpg is taken before a .png of the same face.
