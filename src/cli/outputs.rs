@@ -154,7 +154,7 @@ mod tests {
         );
     }
 
-    /// Issue 34, cases 7 and 8: the snapshots' directory is not the output or the stop file, and a
+    /// The snapshots' directory is not the output or the stop file, and a
     /// snapshot name a directory holds is refused before the render, not after half of it.
     #[test]
     fn refuses_snapshots_that_could_not_be_written() {

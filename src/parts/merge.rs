@@ -252,7 +252,7 @@ mod tests {
         e.replace(&format!("{}/", dir.path().display()), "")
     }
 
-    /// Issue 34, case 18: the merge names the part an interrupted render left, not only the tiles or
+    /// The merge names the part an interrupted render left, not only the tiles or
     /// passes missing.
     #[test]
     fn an_interrupted_part_is_named() {

@@ -144,7 +144,7 @@ fn a_frame_larger_than_the_memory_limit_is_refused_with_both_sizes() {
     );
 }
 
-/// Issue 34, cases 7, 8 and 9: every file a render may write is checked before the scene is loaded,
+/// Every file a render may write is checked before the scene is loaded,
 /// and nothing is made when one is refused: `--progressive-out` naming the output (it made a
 /// directory of that name, rendered, then refused the image: a usage error now), a snapshot name
 /// held by a directory (the render failed after writing half of its passes' mean), and the stop file

@@ -1,4 +1,4 @@
-//! Whatever becomes of the standard streams, no panic and no lost work (issue 34, cases 1, 2 and 5):
+//! Whatever becomes of the standard streams, no panic and no lost work:
 //! a full standard output is an error (status 1, one line), a closed one ends the command quietly
 //! (status 0, as `ls | head` ends `ls`), a standard error that cannot be written never costs the
 //! image, and a scene that is a FIFO is refused without being opened (opening it waits for a writer).

@@ -215,7 +215,7 @@ fn an_interrupted_progressive_render_writes_its_passes_and_resumes() {
     );
 }
 
-/// Issue 34, case 10: `--resume` beside a stop file it cannot use (of another render, bit-flipped,
+/// `--resume` beside a stop file it cannot use (of another render, bit-flipped,
 /// truncated, not a part at all) says which file it ignores and why, renders from the start, and
 /// removes the file once the image is whole, as it removes one it resumed from (it went on silently
 /// and left the stale file). A `.partial` output it cannot use is replaced by the whole part.
@@ -280,7 +280,7 @@ fn resume_names_the_stop_file_it_ignores_and_why() {
 
 /// A write that fails in the middle of a progressive render (here a snapshot's name taken by a
 /// directory after the render checked it) keeps the passes finished in `OUT.partial` and says so:
-/// `--resume` then goes on from them into the uninterrupted render's image (issue 34, case 8: the
+/// `--resume` then goes on from them into the uninterrupted render's image (the
 /// render failed with the mean of 2 of 4 passes written and nothing to resume from).
 #[test]
 fn a_write_failing_mid_render_keeps_the_passes_finished() {

@@ -472,7 +472,7 @@ fn threads_give_the_same_bytes_and_zero_is_a_usage_error() {
     );
 }
 
-/// One rule for the exit status (issue 34, case 12): a value out of its range is a usage error,
+/// One rule for the exit status: a value out of its range is a usage error,
 /// status 2, refused by the argument parser before the scene is read, for `--spp`, `--width`,
 /// `--height` and `--fov` as for `--threads` and `--max-depth` (they were status 1, found by the
 /// render's checks); so are the command line's faults found once the scene is read: options that do

@@ -350,7 +350,7 @@ fn binary_garbage() {
     assert!(e.message.contains("unknown keyword"), "{e}");
 }
 
-/// Issue 34, case 15: a number of 100,000 digits is a number too long, not binary data; a word of
+/// A number of 100,000 digits is a number too long, not binary data; a word of
 /// 2,000 letters is a word too long; only bytes that are not printable say "binary data".
 #[test]
 fn overlong_words_say_what_they_are() {
@@ -412,7 +412,7 @@ fn missing_include() {
     assert_eq!(e.line(), Some(8));
 }
 
-/// Issue 34, case 13: geometry that a transform or a size takes past the largest float is an error at
+/// Geometry that a transform or a size takes past the largest float is an error at
 /// its statement (the include's scale and translation loaded with vertices at infinity, exit 0), as
 /// infinite numbers in the file are; so is a bare mesh whose edges overflow.
 #[test]
