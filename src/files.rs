@@ -162,7 +162,7 @@ pub fn write_atomically(
     tmp.persist(path)
 }
 
-/// A temporary file beside its target: `.NAME.XXXXXX.tmp` with six random characters, `NAME` the
+/// A temporary file beside its target: `.NAME.` then six random characters then `.tmp`, `NAME` the
 /// target's name cut to 64 bytes (so that any name a file system takes leaves room for them). Made
 /// with `O_CREAT | O_EXCL`, so it is never a file or a link that was there before. Listed in
 /// [`LIVE`] while it exists, so that a process ended by a signal removes it
@@ -170,6 +170,8 @@ pub fn write_atomically(
 struct Temporary {
     file: File,
     path: PathBuf,
+    /// Renamed to its target: nothing left to remove.
+    renamed: bool,
 }
 
 /// The temporaries that exist now, for [`remove_temporaries`].
@@ -194,17 +196,19 @@ impl Temporary {
         // Kept from here: a signal's clean-up cannot run between the file's creation and its listing.
         let (file, path) = builder.tempfile_in(dir_of(target))?.keep().map_err(|e| e.error)?;
         live.push(path.clone());
-        Ok(Temporary { file, path })
+        Ok(Temporary {
+            file,
+            path,
+            renamed: false,
+        })
     }
 
     /// Renames the temporary to `target`.
-    fn persist(self, target: &Path) -> std::result::Result<(), String> {
-        let mut live = LIVE.lock().unwrap_or_else(|e| e.into_inner());
+    fn persist(mut self, target: &Path) -> std::result::Result<(), String> {
+        let live = LIVE.lock().unwrap_or_else(|e| e.into_inner());
         std::fs::rename(&self.path, target).map_err(|e| e.to_string())?;
-        live.retain(|p| *p != self.path);
+        self.renamed = true;
         drop(live);
-        // Renamed: nothing left to remove.
-        std::mem::forget(self);
         Ok(())
     }
 }
@@ -212,7 +216,9 @@ impl Temporary {
 impl Drop for Temporary {
     fn drop(&mut self) {
         let mut live = LIVE.lock().unwrap_or_else(|e| e.into_inner());
-        let _ = std::fs::remove_file(&self.path);
+        if !self.renamed {
+            let _ = std::fs::remove_file(&self.path);
+        }
         live.retain(|p| *p != self.path);
     }
 }

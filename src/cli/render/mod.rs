@@ -165,8 +165,8 @@ fn label(plan: &Plan, pass: u32) -> String {
 fn interrupted(plan: &Plan, settings: &PartSettings, acc: &Progressive) -> whitted::Result<Ended> {
     let passes = plan.passes();
     let (done, of) = (acc.passes(), passes.end - passes.start);
-    let by = match signals::received().map(signals::name) {
-        Some(name) if name != "Ctrl-C" => format!(" by {name}"),
+    let by = match signals::received() {
+        Some(signal) if signal != signal_hook::consts::SIGINT => format!(" by {}", signals::name(signal)),
         _ => String::new(),
     };
     if done == 0 {
