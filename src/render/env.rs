@@ -1,13 +1,12 @@
 //! What a ray that leaves the scene sees: a cube-map skybox (`env DIR`) or the background colour.
 
-use std::io::BufReader;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use glam::Vec3;
-use image::{DynamicImage, ImageDecoder, ImageFormat, ImageReader};
 
 use crate::error::{Error, Result};
+use crate::render::codecs::Decoder;
 use crate::scene::Scene;
 
 /// The six faces, in the order of the files `DIR/{right,left,top,bottom,front,back}.jpg`: +x, −x, +y, −y,
@@ -21,7 +20,7 @@ pub const FACES: [&str; 6] = ["right", "left", "top", "bottom", "front", "back"]
 pub const MAX_FACE: u32 = 8192;
 
 /// A face's file opened and its header read: its path and its decoder.
-fn face(dir: &Path, name: &str) -> Result<(PathBuf, impl ImageDecoder)> {
+fn face(dir: &Path, name: &str) -> Result<(PathBuf, Decoder)> {
     let jpg = dir.join(format!("{name}.jpg"));
     let path = if jpg.exists() {
         jpg
@@ -30,16 +29,8 @@ fn face(dir: &Path, name: &str) -> Result<(PathBuf, impl ImageDecoder)> {
     };
     let file = crate::files::open_regular(&path)
         .map_err(|why| Error::file(&path, format!("cannot open the skybox face: {why}")))?;
-    let mut reader = ImageReader::new(BufReader::new(file));
-    // Its extension, unless its first bytes say otherwise.
-    if let Ok(format) = ImageFormat::from_path(&path) {
-        reader.set_format(format);
-    }
-    let decoder = reader
-        .with_guessed_format()
-        .map_err(|e| unreadable(&path, e))?
-        .into_decoder()
-        .map_err(|e| unreadable(&path, e))?;
+    // PNG or JPEG by its first bytes, whatever its extension.
+    let decoder = Decoder::open(file, &path).map_err(|e| unreadable(&path, e))?;
     match decoder.dimensions() {
         (0, _) | (_, 0) => Err(Error::file(&path, "the skybox face is empty")),
         (w, h) if w > MAX_FACE || h > MAX_FACE => Err(Error::file(
@@ -59,7 +50,15 @@ fn unreadable(path: &Path, e: impl std::fmt::Display) -> Error {
 /// no gamma anywhere).
 #[derive(Clone, Debug)]
 pub struct CubeMap {
-    faces: Vec<image::RgbImage>,
+    faces: Vec<Face>,
+}
+
+/// One face: 8-bit RGB texels, row-major.
+#[derive(Clone, Debug)]
+struct Face {
+    width: u32,
+    height: u32,
+    rgb: Vec<u8>,
 }
 
 impl CubeMap {
@@ -70,8 +69,15 @@ impl CubeMap {
         let mut faces = Vec::with_capacity(6);
         for name in FACES {
             let (path, decoder) = face(dir, name)?;
-            let img = DynamicImage::from_decoder(decoder).map_err(|e| unreadable(&path, e))?;
-            faces.push(img.into_rgb8());
+            let (width, height) = decoder.dimensions();
+            let rgb = decoder.decode_rgb8().map_err(|e| unreadable(&path, e))?;
+            if rgb.len() as u64 != 3 * u64::from(width) * u64::from(height) {
+                return Err(unreadable(
+                    &path,
+                    "its pixels do not fill the size its header gives",
+                ));
+            }
+            faces.push(Face { width, height, rgb });
         }
         Ok(CubeMap { faces })
     }
@@ -84,7 +90,7 @@ impl CubeMap {
             let (_, decoder) = face(dir, name)?;
             let (w, h) = decoder.dimensions();
             kept += 3 * u64::from(w) * u64::from(h);
-            decoded = decoded.max(decoder.total_bytes());
+            decoded = decoded.max(decoder.decoded_bytes());
         }
         Ok(kept + decoded)
     }
@@ -114,9 +120,10 @@ impl CubeMap {
         let img = &self.faces[face];
         let s = 0.5 * (sc / ma + 1.0);
         let t = 0.5 * (tc / ma + 1.0);
-        let x = ((s * img.width() as f32) as u32).min(img.width() - 1);
-        let y = ((t * img.height() as f32) as u32).min(img.height() - 1);
-        let p = img.get_pixel(x, y).0;
+        let x = ((s * img.width as f32) as u32).min(img.width - 1);
+        let y = ((t * img.height as f32) as u32).min(img.height - 1);
+        let i = 3 * (y as usize * img.width as usize + x as usize);
+        let p = &img.rgb[i..i + 3];
         Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32) / 255.0
     }
 }
@@ -181,15 +188,36 @@ impl Background {
 
 #[cfg(test)]
 mod tests {
+    use std::fs::File;
+
     use super::*;
+
+    /// Writes a PNG of `color` at `depth` with the samples `data`.
+    fn save_png(path: &Path, (w, h): (u32, u32), color: png::ColorType, depth: png::BitDepth, data: &[u8]) {
+        let mut encoder = png::Encoder::new(std::fs::File::create(path).unwrap(), w, h);
+        encoder.set_color(color);
+        encoder.set_depth(depth);
+        let mut writer = encoder.write_header().unwrap();
+        writer.write_image_data(data).unwrap();
+        writer.finish().unwrap();
+    }
+
+    /// An 8-bit RGB PNG of one colour.
+    fn flat(path: &Path, size: (u32, u32), rgb: [u8; 3]) {
+        let data = rgb.repeat((size.0 * size.1) as usize);
+        save_png(path, size, png::ColorType::Rgb, png::BitDepth::Eight, &data);
+    }
 
     /// Each face a flat colour of its own: the six axis directions see their six faces.
     #[test]
     fn axis_directions_see_their_faces() {
         let dir = tempfile::tempdir().unwrap();
         for (i, name) in FACES.iter().enumerate() {
-            let img = image::RgbImage::from_pixel(4, 4, image::Rgb([i as u8 * 40, 0, 0]));
-            img.save(dir.path().join(format!("{name}.png"))).unwrap();
+            flat(
+                &dir.path().join(format!("{name}.png")),
+                (4, 4),
+                [i as u8 * 40, 0, 0],
+            );
         }
         let sky = CubeMap::load(dir.path()).unwrap();
         let dirs = [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z];
@@ -205,14 +233,82 @@ mod tests {
     fn bytes_count_the_faces_and_the_largest_as_decoded() {
         let dir = tempfile::tempdir().unwrap();
         for name in FACES {
-            let img = image::RgbImage::from_pixel(4, 2, image::Rgb([9, 9, 9]));
-            img.save(dir.path().join(format!("{name}.png"))).unwrap();
+            flat(&dir.path().join(format!("{name}.png")), (4, 2), [9, 9, 9]);
         }
         assert_eq!(CubeMap::bytes(dir.path()).unwrap(), 6 * 24 + 24);
-        let top = image::ImageBuffer::<image::Rgba<u16>, _>::from_pixel(3, 5, image::Rgba([0; 4]));
-        top.save(dir.path().join("top.png")).unwrap();
+        let top = dir.path().join("top.png");
+        save_png(
+            &top,
+            (3, 5),
+            png::ColorType::Rgba,
+            png::BitDepth::Sixteen,
+            &[0; 3 * 5 * 8],
+        );
         assert_eq!(CubeMap::bytes(dir.path()).unwrap(), 5 * 24 + 45 + 3 * 5 * 8);
         let sky = CubeMap::load(dir.path()).unwrap();
-        assert_eq!(sky.faces[2].dimensions(), (3, 5));
+        assert_eq!((sky.faces[2].width, sky.faces[2].height), (3, 5));
+    }
+
+    /// Every PNG becomes 8-bit RGB as its samples say: grey replicated, alpha dropped, 16-bit samples
+    /// to the nearest of 256 levels (v / 257: 1000 is 3.89, so 4; 0x8080 is 128 exactly), a palette
+    /// looked up. And a JPEG, whatever its name, decoded to about its colour.
+    #[test]
+    fn every_kind_of_face_becomes_8_bit_rgb() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let face = |name: &str| {
+            let path = d.join(name);
+            let decoder = Decoder::open(File::open(&path).unwrap(), &path).unwrap();
+            decoder.decode_rgb8().unwrap()
+        };
+        use png::{BitDepth, ColorType};
+        save_png(
+            &d.join("g16.png"),
+            (2, 1),
+            ColorType::Grayscale,
+            BitDepth::Sixteen,
+            &[3, 232, 0x80, 0x80],
+        );
+        assert_eq!(face("g16.png"), [4, 4, 4, 128, 128, 128]);
+        save_png(
+            &d.join("ga.png"),
+            (1, 1),
+            ColorType::GrayscaleAlpha,
+            BitDepth::Eight,
+            &[77, 0],
+        );
+        assert_eq!(face("ga.png"), [77, 77, 77]);
+        save_png(
+            &d.join("rgba.png"),
+            (1, 1),
+            ColorType::Rgba,
+            BitDepth::Eight,
+            &[1, 2, 3, 4],
+        );
+        assert_eq!(face("rgba.png"), [1, 2, 3]);
+        let mut encoder = png::Encoder::new(File::create(d.join("p.png")).unwrap(), 2, 1);
+        encoder.set_color(ColorType::Indexed);
+        encoder.set_depth(BitDepth::Eight);
+        encoder.set_palette(vec![10, 20, 30, 40, 50, 60]);
+        let mut writer = encoder.write_header().unwrap();
+        writer.write_image_data(&[1, 0]).unwrap();
+        writer.finish().unwrap();
+        assert_eq!(face("p.png"), [40, 50, 60, 10, 20, 30]);
+        let jpeg = d.join("j.png");
+        jpeg_encoder::Encoder::new_file(&jpeg, 95)
+            .unwrap()
+            .encode(&[200, 100, 50].repeat(64), 8, 8, jpeg_encoder::ColorType::Rgb)
+            .unwrap();
+        for p in face("j.png").chunks_exact(3) {
+            let near = |a: u8, b: u8| a.abs_diff(b) <= 3;
+            assert!(near(p[0], 200) && near(p[1], 100) && near(p[2], 50), "{p:?}");
+        }
+        std::fs::write(d.join("gif.jpg"), b"GIF89a").unwrap();
+        let path = d.join("gif.jpg");
+        let err = Decoder::open(File::open(&path).unwrap(), &path).err().unwrap();
+        assert_eq!(
+            err,
+            "neither a PNG nor a JPEG file (its first bytes), whatever gif.jpg says"
+        );
     }
 }

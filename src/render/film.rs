@@ -7,6 +7,7 @@ use glam::Vec3;
 
 use crate::error::{Error, Result};
 use crate::files::write_atomically;
+use crate::render::codecs;
 
 /// A width × height image of linear RGB.
 #[derive(Clone, Debug, PartialEq)]
@@ -74,55 +75,27 @@ impl Film {
 
     /// The image's bytes in `format`, as [`Film::write`] writes them (for standard output).
     pub fn encoded(&self, format: ImageFormat, srgb: bool) -> std::result::Result<Vec<u8>, String> {
-        let mut out = std::io::Cursor::new(Vec::new());
+        let mut out = Vec::new();
         self.encode(&mut out, format, srgb)?;
-        Ok(out.into_inner())
+        Ok(out)
     }
 
     /// Encodes the image in `format` into `out`.
     fn encode(
         &self,
-        mut out: impl std::io::Write + std::io::Seek,
+        mut out: impl std::io::Write,
         format: ImageFormat,
         srgb: bool,
     ) -> std::result::Result<(), String> {
+        let (w, h) = (self.width, self.height);
         match format {
-            ImageFormat::Png => self.write_png(&mut out, srgb).map_err(|e| e.to_string()),
+            ImageFormat::Png => codecs::write_png(out, w, h, &self.to_rgb8(srgb), srgb),
             ImageFormat::Ppm => {
-                // A binary P6 pixmap: the image crate's default PNM flavour is PAM (P7), which
-                // few viewers read under a .ppm name.
-                use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
-                PnmEncoder::new(&mut out)
-                    .with_subtype(PnmSubtype::Pixmap(SampleEncoding::Binary))
-                    .encode(
-                        &self.to_rgb8(srgb)[..],
-                        self.width,
-                        self.height,
-                        image::ExtendedColorType::Rgb8,
-                    )
-                    .map_err(|e| e.to_string())
+                codecs::write_ppm(&mut out, w, h, &self.to_rgb8(srgb)).map_err(|e| e.to_string())
             }
-            ImageFormat::Jpeg => image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, JPEG_QUALITY)
-                .encode(
-                    &self.to_rgb8(srgb),
-                    self.width,
-                    self.height,
-                    image::ExtendedColorType::Rgb8,
-                )
-                .map_err(|e| e.to_string()),
-            ImageFormat::Exr => {
-                let data: Vec<f32> = self.pixels.iter().flat_map(|p| p.to_array()).collect();
-                image::Rgb32FImage::from_raw(self.width, self.height, data)
-                    .expect("buffer size matches")
-                    .write_with_encoder(image::codecs::openexr::OpenExrEncoder::new(&mut out))
-                    .map_err(|e| e.to_string())
-            }
+            ImageFormat::Jpeg => codecs::write_jpeg(out, w, h, &self.to_rgb8(srgb), JPEG_QUALITY),
+            ImageFormat::Exr => codecs::write_exr(&mut out, w, h, &self.pixels).map_err(|e| e.to_string()),
         }
-    }
-
-    /// 8-bit RGB PNG with its colour space recorded.
-    fn write_png(&self, out: impl std::io::Write, srgb: bool) -> std::result::Result<(), png::EncodingError> {
-        encode_png(out, self.width, self.height, &self.to_rgb8(srgb), srgb)
     }
 }
 
@@ -132,36 +105,14 @@ impl Film {
 pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8], srgb: bool) -> Result<()> {
     write_atomically(path, |file| {
         let mut out = Recorded::new(std::io::BufWriter::new(file));
-        let encoded = encode_png(&mut out, width, height, rgb, srgb).map_err(|e| e.to_string());
+        let encoded = codecs::write_png(&mut out, width, height, rgb, srgb);
         out.finish(encoded)
     })
     .map_err(|e| Error::file(path, format!("cannot write the image: {e}")))
 }
 
-/// `rgb` as an 8-bit RGB PNG with its colour space: an sRGB chunk with `srgb`, else a gAMA chunk of
-/// 1.0 (linear values).
-fn encode_png(
-    out: impl std::io::Write,
-    width: u32,
-    height: u32,
-    rgb: &[u8],
-    srgb: bool,
-) -> std::result::Result<(), png::EncodingError> {
-    let mut encoder = png::Encoder::new(out, width, height);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    if srgb {
-        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-    } else {
-        encoder.set_source_gamma(png::ScaledFloat::new(1.0));
-    }
-    let mut writer = encoder.write_header()?;
-    writer.write_image_data(rgb)?;
-    writer.finish()
-}
-
-/// A writer that keeps the first I/O error it met: encoders wrap such errors in their own words (the
-/// EXR encoder's "Format error decoding OpenExr" for a full disk), and the user needs the system's.
+/// A writer that keeps the first I/O error it met: encoders wrap such errors in their own words, and
+/// the user needs the system's ("File too large", "No space left on device").
 struct Recorded<W> {
     inner: W,
     error: Option<std::io::Error>,
@@ -204,13 +155,6 @@ impl<W: std::io::Write> std::io::Write for Recorded<W> {
     }
 }
 
-impl<W: std::io::Write + std::io::Seek> std::io::Seek for Recorded<W> {
-    fn seek(&mut self, to: std::io::SeekFrom) -> std::io::Result<u64> {
-        let sought = self.inner.seek(to);
-        self.record(sought)
-    }
-}
-
 /// JPEG quality (of 100): high enough that the 8-bit rounding, not the codec, dominates the error.
 const JPEG_QUALITY: u8 = 95;
 
@@ -250,6 +194,7 @@ impl ImageFormat {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::codecs::read_back;
 
     #[test]
     fn eight_bit_conversion() {
@@ -267,8 +212,7 @@ mod tests {
         film.pixels[4] = Vec3::new(1.0, 0.5, 0.0);
         let out = dir.path().join("a.png");
         film.write(&out, false).unwrap();
-        let img = image::open(&out).unwrap().to_rgb8();
-        assert_eq!(img.get_pixel(1, 1).0, [255, 128, 0]);
+        assert_eq!(read_back::rgb8(&out).get_pixel(1, 1), [255, 128, 0]);
         assert_eq!(
             std::fs::read_dir(dir.path()).unwrap().count(),
             1,
@@ -280,22 +224,20 @@ mod tests {
         // JPEG: lossy, but close at 95.
         let jpg = dir.path().join("f.JPEG");
         film.write(&jpg, false).unwrap();
-        let px = image::open(&jpg).unwrap().to_rgb8().get_pixel(1, 1).0;
+        let px = read_back::rgb8(&jpg).get_pixel(1, 1);
         assert!(px[0] > 200 && (100..160).contains(&px[1]) && px[2] < 60, "{px:?}");
         // PPM is a binary P6 pixmap; EXR keeps the linear, unclamped floats.
         let ppm = dir.path().join("d.ppm");
         film.write(&ppm, false).unwrap();
         assert!(std::fs::read(&ppm).unwrap().starts_with(b"P6"));
-        assert_eq!(
-            image::open(&ppm).unwrap().to_rgb8().get_pixel(1, 1).0,
-            [255, 128, 0]
-        );
+        assert_eq!(read_back::rgb8(&ppm).get_pixel(1, 1), [255, 128, 0]);
         film.pixels[0] = Vec3::new(2.5, 0.0, 0.0);
         let exr = dir.path().join("e.exr");
         film.write(&exr, false).unwrap();
+        let pixels = read_back::exr(&exr);
         assert_eq!(
-            image::open(&exr).unwrap().to_rgb32f().get_pixel(0, 0).0,
-            [2.5, 0.0, 0.0]
+            (pixels.len(), pixels[0], pixels[4]),
+            (6, [2.5, 0.0, 0.0], [1.0, 0.5, 0.0])
         );
     }
 

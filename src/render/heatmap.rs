@@ -452,6 +452,7 @@ fn format_label(v: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::codecs::read_back;
 
     /// matplotlib's published viridis table (`_viridis_data`, van der Walt and Smith 2015): entries 0
     /// and 255, and the mean of entries 127 and 128 (0.5 lies between them), as 0..1 sRGB values.
@@ -634,13 +635,13 @@ mod tests {
         ] {
             let map = row(vec![10.0, 20.0, 30.0, 40.0], scale(s));
             map.write_png(&path).unwrap();
-            let img = image::open(&path).unwrap().to_rgb8();
+            let img = read_back::rgb8(&path);
             let x0 = (img.width() - 4) / 2;
             let ramp = map.ramp();
             for (x, (&v, t)) in map.values.iter().zip(want).enumerate() {
                 assert!((ramp.position(v) - t).abs() < 1e-6, "{s}, {v}");
                 assert_eq!(
-                    img.get_pixel(x0 + x as u32, 0).0,
+                    img.get_pixel(x0 + x as u32, 0),
                     viridis(ramp.position(v)),
                     "{s}, {v}"
                 );
@@ -649,8 +650,7 @@ mod tests {
     }
 
     fn read_exr_max(path: &Path) -> f32 {
-        let img = image::open(path).unwrap().to_rgb32f();
-        img.pixels().map(|p| p.0[0]).fold(0.0, f32::max)
+        read_back::exr(path).iter().map(|p| p[0]).fold(0.0, f32::max)
     }
 
     #[test]
@@ -696,13 +696,13 @@ mod tests {
         gradient(640, 480, 1000.0, "BVH nodes tested per pixel")
             .write_png(&path)
             .unwrap();
-        let img = image::open(&path).unwrap().to_rgb8();
+        let img = read_back::rgb8(&path);
         assert_eq!(img.dimensions(), (640, 480 + LEGEND_HEIGHT));
         // Wide images get the font at twice the size.
         gradient(1024, 8, 10.0, "rays traced per pixel")
             .write_png(&path)
             .unwrap();
-        let img = image::open(&path).unwrap().to_rgb8();
+        let img = read_back::rgb8(&path);
         assert_eq!(img.dimensions(), (1024, 8 + 2 * LEGEND_HEIGHT));
         assert_eq!(
             std::fs::read_dir(dir.path()).unwrap().count(),
@@ -727,21 +727,21 @@ mod tests {
             scale: LINEAR,
         };
         map.write_png(&path).unwrap();
-        let img = image::open(&path).unwrap().to_rgb8();
+        let img = read_back::rgb8(&path);
         // The canvas is wider than the image (the legend's numbers need room): the image is centred.
         let x0 = (img.width() - w) / 2;
         assert!(img.width() > w);
         assert_eq!(
-            img.get_pixel(x0, h - 1).0,
+            img.get_pixel(x0, h - 1),
             viridis(0.0),
             "bottom-left of the zero half"
         );
-        assert_eq!(img.get_pixel(x0 + w - 1, 0).0, viridis(1.0), "a max-valued pixel");
-        assert_eq!(img.get_pixel(0, 0).0, BACKGROUND, "padding");
+        assert_eq!(img.get_pixel(x0 + w - 1, 0), viridis(1.0), "a max-valued pixel");
+        assert_eq!(img.get_pixel(0, 0), BACKGROUND, "padding");
         // The colour bar runs from the bottom to the top.
         let bar_y = h + MARGIN + BAR / 2;
-        assert_eq!(img.get_pixel(MARGIN, bar_y).0, viridis(0.0));
-        assert_eq!(img.get_pixel(img.width() - MARGIN - 1, bar_y).0, viridis(1.0));
+        assert_eq!(img.get_pixel(MARGIN, bar_y), viridis(0.0));
+        assert_eq!(img.get_pixel(img.width() - MARGIN - 1, bar_y), viridis(1.0));
         assert_eq!(map.ramp().labels(), ["0", "19.25", "38.5", "57.75", "77"]);
     }
 
@@ -758,20 +758,20 @@ mod tests {
         };
         map.write_png(&path).unwrap();
         assert_eq!(map.ramp().labels(), ["0"; 5]);
-        let img = image::open(&path).unwrap().to_rgb8();
+        let img = read_back::rgb8(&path);
         let x0 = (img.width() - 40) / 2;
         for y in 0..30 {
             for x in x0..x0 + 40 {
-                assert_eq!(img.get_pixel(x, y).0, viridis(0.0));
+                assert_eq!(img.get_pixel(x, y), viridis(0.0));
             }
         }
         map.write_exr(&dir.path().join("zero.exr")).unwrap();
     }
 
     /// The rows of the canvas, from `y0` on, that hold text (light pixels).
-    fn text_rows(img: &image::RgbImage, y0: u32) -> Vec<u32> {
+    fn text_rows(img: &read_back::Rgb8, y0: u32) -> Vec<u32> {
         (y0..img.height())
-            .filter(|&y| (0..img.width()).any(|x| img.get_pixel(x, y).0 == INK))
+            .filter(|&y| (0..img.width()).any(|x| img.get_pixel(x, y) == INK))
             .collect()
     }
 
@@ -785,7 +785,7 @@ mod tests {
             map.scale = Scale::default();
             let path = dir.path().join(format!("{w}x{h}.png"));
             map.write_png(&path).unwrap();
-            let img = image::open(&path).unwrap().to_rgb8();
+            let img = read_back::rgb8(&path);
             assert_eq!(img.height(), h + LEGEND_HEIGHT);
             // The label fits at full 8-pixel size with a margin, and the five numbers side by side.
             assert!(

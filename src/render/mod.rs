@@ -17,6 +17,7 @@
 //!   written as an image at the end (or as a `.partial` part of a frame, [`crate::parts`]).
 
 pub mod camera;
+mod codecs;
 pub mod cost;
 pub mod env;
 pub mod film;

@@ -204,8 +204,8 @@ fn under_xvfb_the_scripted_frames_are_render_passes() {
     );
 }
 
-fn read(path: &Path) -> image::RgbImage {
-    image::open(path).unwrap().to_rgb8()
+fn read(path: &Path) -> common::Rgb8 {
+    common::rgb(path)
 }
 
 /// Out-of-range or unknown values are usage errors (exit status 2) named by clap, before any window.
