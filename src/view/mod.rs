@@ -37,7 +37,7 @@ use state::{Accumulator, Job};
 
 pub use window::run;
 
-/// The largest side of the window: X11's sizes are 16-bit (winit panics on more).
+/// The largest side of the window: X11's sizes are 16-bit.
 pub const MAX_WINDOW: u32 = u16::MAX as u32;
 
 /// How the viewer starts.

@@ -1,7 +1,8 @@
 //! `whitted view`: a clear error without a display; under Xvfb (when `xvfb-run` is installed) a real
 //! window whose scripted frames give `render --passes`'s image, whose options (`--height`, `--accel`,
-//! `--kernel`, `--max-depth`, `--srgb`) reach the frame, its title and its screenshot, and whose keys
-//! (F12, Ctrl-S, Escape, pressed through the X server's XTEST extension) save and quit.
+//! `--kernel`, `--max-depth`, `--srgb`) reach the frame, its title and its screenshot, whose pixels
+//! are the frame's, which resizes and closes, and whose keys (F12, Ctrl-S, P, Escape, pressed through
+//! the X server's XTEST extension) save, pause and quit.
 #![cfg(feature = "view")]
 
 #[path = "../common/mod.rs"]
@@ -85,8 +86,8 @@ fn screenshot_needs_frames() {
 }
 
 /// A window side over 65535 (X11's sizes are 16-bit) is a usage error naming the option and its range,
-/// given or made from the scene's frame, before any window (winit panics on it, and the process never
-/// exits): here, without a display, before the display is even looked for.
+/// given or made from the scene's frame, before any window (the protocol cannot carry it): here,
+/// without a display, before the display is even looked for.
 #[test]
 fn a_window_side_over_65535_is_a_usage_error() {
     let expected = |option: &str, found: &str| {
@@ -168,7 +169,7 @@ fn under_xvfb_the_scripted_frames_are_render_passes() {
     let shot = dir.path().join("shot.png");
     let reference = dir.path().join("reference.png");
     let scene = "scenes/balls_low.p3f";
-    // Without Wayland's variables, so that winit takes Xvfb's display even inside a Wayland session.
+    // Without Wayland's variables: the same run inside a Wayland session as outside.
     let out = Command::new("xvfb-run")
         .env_remove("WAYLAND_DISPLAY")
         .env_remove("WAYLAND_SOCKET")
@@ -394,6 +395,87 @@ fn under_xvfb_f12_and_ctrl_s_save_what_render_renders_and_escape_quits() {
     }
 }
 
+/// Under Xvfb, what the window shows: after P (no more passes) and F12, the window's pixels, read
+/// back from the X server, are the saved frame's, pixel for pixel; a resize (no window manager here, so
+/// the test's own) renders at the new size; the close button's message (WM_DELETE_WINDOW) quits with
+/// status 0.
+#[cfg(target_os = "linux")]
+#[test]
+fn under_xvfb_the_window_shows_the_frame_resizes_and_closes() {
+    if !common::have("xvfb-run", &["--help"], "apt-get install xvfb") {
+        return;
+    }
+    let _xvfb = one_xvfb();
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::root().join("scenes/balls_low.p3f");
+    let args = [
+        scene.to_str().unwrap(),
+        "--width",
+        "48",
+        "--height",
+        "32",
+        "--threads",
+        "2",
+    ];
+    let mut viewer = keys::Viewer::start(dir.path(), &args);
+    viewer.title_once(|t| t.contains(" | pass "));
+    viewer.press(&[keys::P]);
+    viewer.title_once(|t| t.ends_with(" | progressive off"));
+    // A pass that was ending when P came may still be shown: let it.
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    viewer.press(&[keys::F12]);
+    viewer.saved("balls_low-view-1.png");
+    let shot = read(&dir.path().join("balls_low-view-1.png"));
+    let (width, height, pixels) = viewer.pixels();
+    assert_eq!((width, height), (48, 32));
+    assert!(
+        pixels == shot.as_raw()[..],
+        "the window does not show the saved frame"
+    );
+
+    viewer.resize(96, 64);
+    viewer.title_once(|t| t.contains(" | 96x64 (full) | "));
+    viewer.close();
+    let status = viewer.wait();
+    assert_eq!(
+        status.code(),
+        Some(0),
+        "the close button quits: {}",
+        viewer.stderr()
+    );
+}
+
+/// Under Xvfb, a key held down acts once: `]` held for a second (the server repeats it many times)
+/// adds one bounce, not one per repeat.
+#[cfg(target_os = "linux")]
+#[test]
+fn under_xvfb_a_held_key_acts_once() {
+    if !common::have("xvfb-run", &["--help"], "apt-get install xvfb") {
+        return;
+    }
+    let _xvfb = one_xvfb();
+    let dir = tempfile::tempdir().unwrap();
+    let scene = common::root().join("scenes/balls_low.p3f");
+    let args = [
+        scene.to_str().unwrap(),
+        "--width",
+        "48",
+        "--height",
+        "32",
+        "--threads",
+        "2",
+    ];
+    let mut viewer = keys::Viewer::start(dir.path(), &args);
+    viewer.title_once(|t| t.ends_with(", depth 6"));
+    viewer.hold(keys::BRACKET_RIGHT, std::time::Duration::from_secs(1));
+    // Frames come after the release (the title follows them); a repeat would be in them by now.
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let title = viewer.title_once(|t| t.contains(" | pass "));
+    assert!(title.ends_with(", depth 7"), "{title}");
+    viewer.press(&[keys::ESCAPE]);
+    assert_eq!(viewer.wait().code(), Some(0), "{}", viewer.stderr());
+}
+
 /// Driving the viewer's window under Xvfb: its display read from the shell xvfb-run starts, its window
 /// found by title, its keys pressed through XTEST, its stderr read line by line.
 #[cfg(target_os = "linux")]
@@ -406,7 +488,8 @@ mod keys {
 
     use x11rb::connection::{Connection, RequestConnection};
     use x11rb::protocol::xproto::{
-        AtomEnum, ConnectionExt as _, InputFocus, KEY_PRESS_EVENT, KEY_RELEASE_EVENT, MapState, Window,
+        AtomEnum, ClientMessageEvent, ConfigureWindowAux, ConnectionExt as _, EventMask, ImageFormat,
+        ImageOrder, InputFocus, KEY_PRESS_EVENT, KEY_RELEASE_EVENT, MapState, Window,
     };
     use x11rb::protocol::xtest::ConnectionExt as _;
     use x11rb::rust_connection::RustConnection;
@@ -416,6 +499,8 @@ mod keys {
     pub const CONTROL_L: u32 = 0xffe3;
     pub const S: u32 = 0x0073;
     pub const ESCAPE: u32 = 0xff1b;
+    pub const P: u32 = 0x0070;
+    pub const BRACKET_RIGHT: u32 = 0x005d;
 
     /// How long anything may take: a window opening, a frame, a save.
     const PATIENCE: Duration = Duration::from_secs(60);
@@ -590,6 +675,71 @@ mod keys {
             for &code in codes.iter().rev() {
                 fake(KEY_RELEASE_EVENT, code);
             }
+            self.conn.get_input_focus().unwrap().reply().unwrap();
+        }
+
+        /// Holds `keysym` down for `time` (long enough, the server repeats it), then lets it go.
+        pub fn hold(&mut self, keysym: u32, time: Duration) {
+            let code = self.keycode(keysym);
+            for kind in [KEY_PRESS_EVENT, KEY_RELEASE_EVENT] {
+                self.conn
+                    .xtest_fake_input(kind, code, x11rb::CURRENT_TIME, self.root, 0, 0, 0)
+                    .unwrap();
+                self.conn.get_input_focus().unwrap().reply().unwrap();
+                if kind == KEY_PRESS_EVENT {
+                    std::thread::sleep(time);
+                }
+            }
+        }
+
+        /// The window's size and its pixels as RGB bytes, row after row, read back from the server
+        /// (Xvfb's 24-bit TrueColor screen: 32-bit pixels, red, green and blue bytes from the top).
+        pub fn pixels(&self) -> (u16, u16, Vec<u8>) {
+            let geometry = self.conn.get_geometry(self.window).unwrap().reply().unwrap();
+            let (width, height) = (geometry.width, geometry.height);
+            let image = self
+                .conn
+                .get_image(ImageFormat::Z_PIXMAP, self.window, 0, 0, width, height, !0)
+                .unwrap()
+                .reply()
+                .unwrap();
+            let setup = self.conn.setup();
+            let format = setup
+                .pixmap_formats
+                .iter()
+                .find(|f| f.depth == image.depth)
+                .unwrap();
+            assert_eq!((image.depth, format.bits_per_pixel), (24, 32), "Xvfb's screen");
+            let rgb = image
+                .data
+                .chunks_exact(4)
+                .flat_map(|p| {
+                    let p = [p[0], p[1], p[2], p[3]];
+                    let word = match setup.image_byte_order {
+                        ImageOrder::MSB_FIRST => u32::from_be_bytes(p),
+                        _ => u32::from_le_bytes(p),
+                    };
+                    [(word >> 16) as u8, (word >> 8) as u8, word as u8]
+                })
+                .collect();
+            (width, height, rgb)
+        }
+
+        /// Resizes the window, as a window manager would.
+        pub fn resize(&self, width: u32, height: u32) {
+            let size = ConfigureWindowAux::new().width(width).height(height);
+            self.conn.configure_window(self.window, &size).unwrap();
+            self.conn.get_input_focus().unwrap().reply().unwrap();
+        }
+
+        /// Clicks the window's close button: the window manager's WM_DELETE_WINDOW message.
+        pub fn close(&self) {
+            let atom = |name: &[u8]| self.conn.intern_atom(false, name).unwrap().reply().unwrap().atom;
+            let (protocols, delete) = (atom(b"WM_PROTOCOLS"), atom(b"WM_DELETE_WINDOW"));
+            let message = ClientMessageEvent::new(32, self.window, protocols, [delete, 0, 0, 0, 0]);
+            self.conn
+                .send_event(false, self.window, EventMask::NO_EVENT, message)
+                .unwrap();
             self.conn.get_input_focus().unwrap().reply().unwrap();
         }
 
