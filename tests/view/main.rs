@@ -429,7 +429,7 @@ fn under_xvfb_the_window_shows_the_frame_resizes_and_closes() {
     let (width, height, pixels) = viewer.pixels();
     assert_eq!((width, height), (48, 32));
     assert!(
-        pixels == shot.as_raw()[..],
+        pixels == shot.data[..],
         "the window does not show the saved frame"
     );
 
