@@ -4,8 +4,9 @@
 //! (`RustConnection`) talks to the X server over the socket, so the viewer needs no system library at
 //! build or at run time: nothing to install, no `-dev` package, no pkg-config, no libX11 or libxcb.
 //! The core protocol has everything a window of pixels needs (keys, pointer, resize, `PutImage`), so no
-//! extension of its own is compiled in: x11rb builds in about 14 s of CPU, where winit's X11 backend
-//! with softbuffer costs about 70 s. Only X11: a Wayland desktop runs the window through XWayland.
+//! extension of its own is compiled in, and x11rb builds in a fraction of the time of winit's X11
+//! backend with softbuffer (`docs/testing.md`). Only X11: a Wayland desktop runs the window through
+//! XWayland.
 //! Without a display the viewer fails with one line, not a panic.
 //!
 //! The event loop drains the X events, then waits for the render thread's next frame for at most a
