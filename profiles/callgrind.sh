@@ -18,7 +18,7 @@ for tool in valgrind callgrind_annotate; do
     }
 done
 cd "$root"
-cargo build --profile profiling --example hot_loops --quiet ${FEATURES:+--features "$FEATURES"}
+cargo build --profile profiling --example hot_loops --quiet --features "hot-loops${FEATURES:+,$FEATURES}"
 sim=()
 [ "${SIM:-0}" = 1 ] && sim=(--cache-sim=yes --branch-sim=yes)
 bin="$root/target/profiling/examples/hot_loops"

@@ -13,7 +13,7 @@ for tool in valgrind callgrind_annotate python3; do
     }
 done
 cd "$root"
-cargo build --profile profiling --example hot_loops --quiet
+cargo build --profile profiling --example hot_loops --features hot-loops --quiet
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 valgrind --tool=callgrind --callgrind-out-file="$tmp/frame.out" --toggle-collect='*measured_*' \

@@ -13,7 +13,7 @@ command -v valgrind >/dev/null && command -v callgrind_annotate >/dev/null || {
     exit 1
 }
 cd "$root"
-cargo build --profile profiling --example hot_loops --quiet
+cargo build --profile profiling --example hot_loops --features hot-loops --quiet
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 {
