@@ -296,6 +296,8 @@ impl<'a> Accel<'a> {
 
 /// Whether an accelerator's verbs count their steps: the hit policies they trace with.
 pub trait Tally {
+    /// Whether the verbs count their steps.
+    const COUNTS: bool;
     /// The closest-hit policy.
     type Closest: HitPolicy;
     /// The closest-hit policy for coherent rays.
@@ -308,6 +310,7 @@ pub trait Tally {
 pub enum Plain {}
 
 impl Tally for Plain {
+    const COUNTS: bool = false;
     type Closest = Closest;
     type Coherent = Coherent;
     type Any = AnyHit;
@@ -317,6 +320,7 @@ impl Tally for Plain {
 pub enum Counting {}
 
 impl Tally for Counting {
+    const COUNTS: bool = true;
     type Closest = Counted<Closest>;
     type Coherent = Counted<Coherent>;
     type Any = Counted<AnyHit>;

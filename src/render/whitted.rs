@@ -18,7 +18,7 @@ use super::optics::{beer, reflect, refract, schlick};
 use super::options::MAX_DEPTH;
 use super::sampler::Sampler;
 use crate::accel::counters::{self, Steps};
-use crate::accel::{Accel, Hit, Plain, Prims, Surface, Tally, Verbs};
+use crate::accel::{Accel, Counting, Hit, Plain, Prims, Surface, Tally, Verbs};
 use crate::geometry::ray::Ray;
 use crate::scene::{Material, MaterialId, QuadLight, Scene};
 
@@ -218,6 +218,14 @@ thread_local! {
     static SAMPLE_STEPS: std::cell::RefCell<Vec<KindSteps>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
+/// Runs `f` in a call of its own, marked cold: a counting render's verbs, kept out of the plain
+/// frame's hot loops (inlined there, they lengthen the plain frame, `profiles/frame.sh`).
+#[cold]
+#[inline(never)]
+pub(super) fn out_of_line<R>(f: impl FnOnce() -> R) -> R {
+    f()
+}
+
 /// Adds `steps`, of a ray of `kind`, to the sample in `slot`.
 pub(super) fn charge(slot: u32, kind: RayKind, steps: Steps) {
     SAMPLE_STEPS.with_borrow_mut(|all| {
@@ -361,34 +369,42 @@ impl<'a> Whitted<'a> {
     pub fn trace(&self, ray: &Ray, depth: u32, kind: RayKind, sample: &mut PixelSample) -> Vec3 {
         let mut hit = Hit::miss(f32::INFINITY);
         if self.count {
-            self.closest_counted(ray, kind, sample, &mut hit);
+            out_of_line(|| self.closest_tallied::<Counting>(ray, kind, sample, &mut hit));
         } else {
-            closest(self.accel.verbs::<Plain>(), ray, kind, &mut hit);
+            self.closest_tallied::<Plain>(ray, kind, sample, &mut hit);
         }
         self.shade(ray, &hit, depth, sample)
     }
 
-    /// [`Whitted::trace`]'s closest hit, counted: out of the way of the plain path.
-    #[cold]
-    #[inline(never)]
-    fn closest_counted(&self, ray: &Ray, kind: RayKind, sample: &PixelSample, hit: &mut Hit) {
-        closest(self.accel.counting(), ray, kind, hit);
-        charge(sample.slot, kind, counters::lane(0));
+    /// [`Whitted::trace`]'s closest hit through the verbs of `T`, its steps charged to the sample's
+    /// slot when `T` counts.
+    #[inline(always)]
+    fn closest_tallied<T: Tally>(&self, ray: &Ray, kind: RayKind, sample: &PixelSample, hit: &mut Hit) {
+        closest(self.accel.verbs::<T>(), ray, kind, hit);
+        if T::COUNTS {
+            charge(sample.slot, kind, counters::lane(0));
+        }
     }
 
     /// Whether `shadow` is blocked, its steps added to `steps` when counting.
     pub(super) fn blocked(&self, shadow: &ShadowRay, steps: &mut Steps) -> bool {
         if self.count {
-            return self.blocked_counted(shadow, steps);
+            out_of_line(|| self.blocked_tallied::<Counting>(shadow, steps))
+        } else {
+            self.blocked_tallied::<Plain>(shadow, steps)
         }
-        self.accel.occluded(&shadow.ray, 0.0, shadow.distance)
     }
 
-    #[cold]
-    #[inline(never)]
-    fn blocked_counted(&self, shadow: &ShadowRay, steps: &mut Steps) -> bool {
-        let blocked = self.accel.counting().occluded(&shadow.ray, 0.0, shadow.distance);
-        *steps += counters::lane(0);
+    /// [`Whitted::blocked`] through the verbs of `T`.
+    #[inline(always)]
+    fn blocked_tallied<T: Tally>(&self, shadow: &ShadowRay, steps: &mut Steps) -> bool {
+        let blocked = self
+            .accel
+            .verbs::<T>()
+            .occluded(&shadow.ray, 0.0, shadow.distance);
+        if T::COUNTS {
+            *steps += counters::lane(0);
+        }
         blocked
     }
 

@@ -20,15 +20,17 @@ use wide::f32x8;
 
 use super::shade::{HitLanes, light};
 use super::{BLOCK_H, BLOCK_W, PerRay, TilePixels, coherent};
-use crate::accel::Hit;
 use crate::accel::counters;
 use crate::accel::packet::{PACKET, bits};
+use crate::accel::{Counting, Hit, Plain, Tally};
 use crate::geometry::ray::Ray;
 use crate::render::lanes::{Vec3x8, lane_mask};
 use crate::render::renderer::Renderer;
 use crate::render::sampler::PixelPattern;
 use crate::render::tiles::{TILE, Tile};
-use crate::render::whitted::{Bounces, PixelSample, RayCounts, RayKind, Whitted, charge, take_steps};
+use crate::render::whitted::{
+    Bounces, PixelSample, RayCounts, RayKind, Whitted, charge, out_of_line, take_steps,
+};
 
 impl Whitted<'_> {
     /// The colours seen along the rays of `rays` in `active` after `depth` bounces (others are zero):
@@ -45,9 +47,9 @@ impl Whitted<'_> {
     ) -> Vec3x8 {
         let mut hits = [Hit::miss(f32::INFINITY); PACKET];
         let hit = if self.counts() {
-            closest_counted(self, rays, active, kind, samples, &mut hits)
+            out_of_line(|| closest_tallied::<Counting>(self, rays, active, kind, samples, &mut hits))
         } else {
-            self.accel.intersect_packet(rays, active, 0.0, &mut hits)
+            closest_tallied::<Plain>(self, rays, active, kind, samples, &mut hits)
         };
         if depth == 0 {
             for k in bits(hit) {
@@ -151,9 +153,9 @@ impl Whitted<'_> {
             }
             let (shadows, distance) = hits.shadow_rays(&toward);
             let blocked = if self.counts() {
-                blocked_counted(self, &shadows, lit, &distance, samples)
+                out_of_line(|| blocked_tallied::<Counting>(self, &shadows, lit, &distance, samples))
             } else {
-                self.accel.occluded_packet(&shadows, lit, 0.0, &distance)
+                blocked_tallied::<Plain>(self, &shadows, lit, &distance, samples)
             };
             hits.add_light(&mut color, &toward, lit & !blocked, light);
         }
@@ -161,11 +163,10 @@ impl Whitted<'_> {
     }
 }
 
-/// [`Whitted::shade_packet`]'s closest hits, counted into each lane's sample as rays of `kind`: out
-/// of the way of the plain path.
-#[cold]
-#[inline(never)]
-fn closest_counted(
+/// [`Whitted::shade_packet`]'s closest hits through the verbs of `T`, counted into each lane's sample
+/// as rays of `kind` when `T` counts.
+#[inline(always)]
+fn closest_tallied<T: Tally>(
     whitted: &Whitted,
     rays: &PerRay<Ray>,
     active: u8,
@@ -173,26 +174,36 @@ fn closest_counted(
     samples: &PerRay<PixelSample>,
     hits: &mut PerRay<Hit>,
 ) -> u8 {
-    let hit = whitted.accel.counting().intersect_packet(rays, active, 0.0, hits);
-    for k in bits(active) {
-        charge(samples[k].slot, kind, counters::lane(k));
+    let hit = whitted
+        .accel
+        .verbs::<T>()
+        .intersect_packet(rays, active, 0.0, hits);
+    if T::COUNTS {
+        for k in bits(active) {
+            charge(samples[k].slot, kind, counters::lane(k));
+        }
     }
     hit
 }
 
-/// A packet of shadow rays, counted into each lane's sample.
-#[cold]
-#[inline(never)]
-fn blocked_counted(
+/// Which of a packet of shadow rays are blocked, through the verbs of `T`, counted into each lane's
+/// sample when `T` counts.
+#[inline(always)]
+fn blocked_tallied<T: Tally>(
     whitted: &Whitted,
     rays: &PerRay<Ray>,
     active: u8,
     t_max: &[f32; PACKET],
     samples: &PerRay<PixelSample>,
 ) -> u8 {
-    let hit = whitted.accel.counting().occluded_packet(rays, active, 0.0, t_max);
-    for k in bits(active) {
-        charge(samples[k].slot, RayKind::Shadow, counters::lane(k));
+    let hit = whitted
+        .accel
+        .verbs::<T>()
+        .occluded_packet(rays, active, 0.0, t_max);
+    if T::COUNTS {
+        for k in bits(active) {
+            charge(samples[k].slot, RayKind::Shadow, counters::lane(k));
+        }
     }
     hit
 }
