@@ -262,30 +262,36 @@ mod tests {
             decoder.decode_rgb8().unwrap()
         };
         use png::{BitDepth, ColorType};
-        save_png(
-            &d.join("g16.png"),
-            (2, 1),
-            ColorType::Grayscale,
-            BitDepth::Sixteen,
-            &[3, 232, 0x80, 0x80],
-        );
-        assert_eq!(face("g16.png"), [4, 4, 4, 128, 128, 128]);
-        save_png(
-            &d.join("ga.png"),
-            (1, 1),
-            ColorType::GrayscaleAlpha,
-            BitDepth::Eight,
-            &[77, 0],
-        );
-        assert_eq!(face("ga.png"), [77, 77, 77]);
-        save_png(
-            &d.join("rgba.png"),
-            (1, 1),
-            ColorType::Rgba,
-            BitDepth::Eight,
-            &[1, 2, 3, 4],
-        );
-        assert_eq!(face("rgba.png"), [1, 2, 3]);
+        // A PNG's colour type, depth, size and samples, and the 8-bit RGB it becomes.
+        type Case = (ColorType, BitDepth, (u32, u32), &'static [u8], &'static [u8]);
+        let cases: [Case; 3] = [
+            (
+                ColorType::Grayscale,
+                BitDepth::Sixteen,
+                (2, 1),
+                &[3, 232, 0x80, 0x80],
+                &[4, 4, 4, 128, 128, 128],
+            ),
+            (
+                ColorType::GrayscaleAlpha,
+                BitDepth::Eight,
+                (1, 1),
+                &[77, 0],
+                &[77, 77, 77],
+            ),
+            (
+                ColorType::Rgba,
+                BitDepth::Eight,
+                (1, 1),
+                &[1, 2, 3, 4],
+                &[1, 2, 3],
+            ),
+        ];
+        for (i, (color, depth, size, samples, rgb)) in cases.into_iter().enumerate() {
+            let name = format!("{i}.png");
+            save_png(&d.join(&name), size, color, depth, samples);
+            assert_eq!(face(&name), rgb, "{color:?} {depth:?}");
+        }
         let mut encoder = png::Encoder::new(File::create(d.join("p.png")).unwrap(), 2, 1);
         encoder.set_color(ColorType::Indexed);
         encoder.set_depth(BitDepth::Eight);
