@@ -316,6 +316,23 @@ fn under_xvfb_the_options_reach_the_screenshot() {
     );
 }
 
+/// The viewer on `scenes/balls_low.p3f` at 48x32 on two threads, with `more` arguments, under the
+/// test's Xvfb.
+#[cfg(target_os = "linux")]
+fn small_viewer(dir: &Path, more: &[&str]) -> keys::Viewer {
+    let scene = common::root().join("scenes/balls_low.p3f");
+    let args = [
+        scene.to_str().unwrap(),
+        "--width",
+        "48",
+        "--height",
+        "32",
+        "--threads",
+        "2",
+    ];
+    keys::Viewer::start(dir, &[&args[..], more].concat())
+}
+
 /// Under Xvfb, the viewer's keys through XTEST: the title shows the options given (accelerator,
 /// kernel, size, depth); F12 and then Ctrl-S save the frame on screen as `balls_low-view-1.png` and
 /// `-2.png` in the current directory, each with the `whitted render` command that renders the same
@@ -329,17 +346,9 @@ fn under_xvfb_f12_and_ctrl_s_save_what_render_renders_and_escape_quits() {
     }
     let _xvfb = one_xvfb();
     let dir = tempfile::tempdir().unwrap();
-    let scene = common::root().join("scenes/balls_low.p3f");
-    let mut viewer = keys::Viewer::start(
+    let mut viewer = small_viewer(
         dir.path(),
         &[
-            scene.to_str().unwrap(),
-            "--width",
-            "48",
-            "--height",
-            "32",
-            "--threads",
-            "2",
             "--accel",
             "grid",
             "--kernel",
@@ -407,17 +416,7 @@ fn under_xvfb_the_window_shows_the_frame_resizes_and_closes() {
     }
     let _xvfb = one_xvfb();
     let dir = tempfile::tempdir().unwrap();
-    let scene = common::root().join("scenes/balls_low.p3f");
-    let args = [
-        scene.to_str().unwrap(),
-        "--width",
-        "48",
-        "--height",
-        "32",
-        "--threads",
-        "2",
-    ];
-    let mut viewer = keys::Viewer::start(dir.path(), &args);
+    let mut viewer = small_viewer(dir.path(), &[]);
     viewer.title_once(|t| t.contains(" | pass "));
     viewer.press(&[keys::P]);
     viewer.title_once(|t| t.ends_with(" | progressive off"));
@@ -455,17 +454,7 @@ fn under_xvfb_a_held_key_acts_once() {
     }
     let _xvfb = one_xvfb();
     let dir = tempfile::tempdir().unwrap();
-    let scene = common::root().join("scenes/balls_low.p3f");
-    let args = [
-        scene.to_str().unwrap(),
-        "--width",
-        "48",
-        "--height",
-        "32",
-        "--threads",
-        "2",
-    ];
-    let mut viewer = keys::Viewer::start(dir.path(), &args);
+    let mut viewer = small_viewer(dir.path(), &[]);
     viewer.title_once(|t| t.ends_with(", depth 6"));
     viewer.hold(keys::BRACKET_RIGHT, std::time::Duration::from_secs(1));
     // Frames come after the release (the title follows them); a repeat would be in them by now.
