@@ -107,7 +107,7 @@ impl Decoder {
 /// `rgb` (8-bit RGB, row-major) as a PNG with its colour space: an sRGB chunk with `srgb`, else a gAMA
 /// chunk of 1.0 (linear values), so viewers show what the numbers mean.
 pub(crate) fn write_png(
-    out: impl Write,
+    out: &mut dyn Write,
     width: u32,
     height: u32,
     rgb: &[u8],
@@ -127,14 +127,14 @@ pub(crate) fn write_png(
 }
 
 /// `rgb` as a binary pixmap (Netpbm's P6, maxval 255), which every viewer reads under a `.ppm` name.
-pub(crate) fn write_ppm(mut out: impl Write, width: u32, height: u32, rgb: &[u8]) -> io::Result<()> {
+pub(crate) fn write_ppm(out: &mut dyn Write, width: u32, height: u32, rgb: &[u8]) -> io::Result<()> {
     write!(out, "P6\n{width} {height}\n255\n")?;
     out.write_all(rgb)
 }
 
 /// `rgb` as a baseline JPEG of `quality` (of 100). JPEG's sides are 16-bit: a larger image is an error.
 pub(crate) fn write_jpeg(
-    out: impl Write,
+    out: &mut dyn Write,
     width: u32,
     height: u32,
     rgb: &[u8],
@@ -142,15 +142,57 @@ pub(crate) fn write_jpeg(
 ) -> Result<(), String> {
     let side =
         |v: u32| u16::try_from(v).map_err(|_| format!("a JPEG holds at most 65535 pixels a side, not {v}"));
+    let (width, height) = (side(width)?, side(height)?);
+    let need = 3 * usize::from(width) * usize::from(height);
+    if rgb.len() != need {
+        return Err(format!(
+            "{} bytes of RGB for {width}x{height} pixels, not {need}",
+            rgb.len()
+        ));
+    }
     jpeg_encoder::Encoder::new(out, quality)
-        .encode(rgb, side(width)?, side(height)?, jpeg_encoder::ColorType::Rgb)
+        .encode_image(Rgb8 { rgb, width, height })
         .map_err(|e| e.to_string())
+}
+
+/// 8-bit RGB rows for the JPEG encoder, which takes them converted to Y'CbCr a line at a time. The
+/// encoder's own `encode` instantiates itself for each of its nine pixel layouts; this is the one used.
+struct Rgb8<'a> {
+    rgb: &'a [u8],
+    width: u16,
+    height: u16,
+}
+
+impl jpeg_encoder::ImageBuffer for Rgb8<'_> {
+    fn get_jpeg_color_type(&self) -> jpeg_encoder::JpegColorType {
+        jpeg_encoder::JpegColorType::Ycbcr
+    }
+
+    fn width(&self) -> u16 {
+        self.width
+    }
+
+    fn height(&self) -> u16 {
+        self.height
+    }
+
+    fn fill_buffers(&self, y: u16, buffers: &mut [Vec<u8>; 4]) {
+        let row = 3 * usize::from(self.width);
+        let start = usize::from(y) * row;
+        for p in self.rgb[start..start + row].chunks_exact(3) {
+            // ITU-T T.871's conversion, in the encoder's fixed point.
+            let (luma, cb, cr) = jpeg_encoder::rgb_to_ycbcr(p[0], p[1], p[2]);
+            buffers[0].push(luma);
+            buffers[1].push(cb);
+            buffers[2].push(cr);
+        }
+    }
 }
 
 /// `pixels` (row-major, top row first) as a single-part OpenEXR file of uncompressed scanlines, the
 /// channels B, G, R (the format orders them by name) as 32-bit floats: linear and unclamped (OpenEXR
 /// File Layout, openexr.com: magic, version, header attributes, the offset table, one line a chunk).
-pub(crate) fn write_exr(mut out: impl Write, width: u32, height: u32, pixels: &[Vec3]) -> io::Result<()> {
+pub(crate) fn write_exr(out: &mut dyn Write, width: u32, height: u32, pixels: &[Vec3]) -> io::Result<()> {
     const FLOAT: i32 = 2;
     // The header's sizes are 32-bit signed.
     let line = 3 * 4 * u64::from(width);

@@ -83,18 +83,16 @@ impl Film {
     /// Encodes the image in `format` into `out`.
     fn encode(
         &self,
-        mut out: impl std::io::Write,
+        out: &mut dyn std::io::Write,
         format: ImageFormat,
         srgb: bool,
     ) -> std::result::Result<(), String> {
         let (w, h) = (self.width, self.height);
         match format {
             ImageFormat::Png => codecs::write_png(out, w, h, &self.to_rgb8(srgb), srgb),
-            ImageFormat::Ppm => {
-                codecs::write_ppm(&mut out, w, h, &self.to_rgb8(srgb)).map_err(|e| e.to_string())
-            }
+            ImageFormat::Ppm => codecs::write_ppm(out, w, h, &self.to_rgb8(srgb)).map_err(|e| e.to_string()),
             ImageFormat::Jpeg => codecs::write_jpeg(out, w, h, &self.to_rgb8(srgb), JPEG_QUALITY),
-            ImageFormat::Exr => codecs::write_exr(&mut out, w, h, &self.pixels).map_err(|e| e.to_string()),
+            ImageFormat::Exr => codecs::write_exr(out, w, h, &self.pixels).map_err(|e| e.to_string()),
         }
     }
 }

@@ -121,6 +121,8 @@ impl Slurm {
         // Accounting, cgroups and MPI stay off: nothing of the machine's is touched. The script asks 16
         // CPUs a task, so the node claims at least 16 (config_overrides: slurmd believes this file
         // rather than the hardware), and the node is reached at 127.0.0.1 whatever the host name resolves to.
+        // The main scheduling loop runs every second instead of every minute: a job whose dependency was
+        // met starts then, not up to a minute later (a big cluster's default, not a behaviour tested).
         let conf = format!(
             "ClusterName=whitted
 SlurmctldHost={host}(127.0.0.1)
@@ -139,6 +141,7 @@ AccountingStorageType=accounting_storage/none
 MpiDefault=none
 MailProg=/bin/true
 ReturnToService=2
+SchedulerParameters=sched_interval=1
 SlurmdParameters=config_overrides
 StateSaveLocation={state}
 SlurmdSpoolDir={spool}
