@@ -155,7 +155,7 @@ fn an_interrupted_progressive_render_writes_its_passes_and_resumes() {
     let d = dir.path();
     let out = d.join("c.png").to_string_lossy().into_owned();
     let snaps = d.join("snaps").to_string_lossy().into_owned();
-    // 64 x 48 at one sample a pass on one thread: some milliseconds a pass, 1000 passes.
+    // 64 x 48 at one sample a pass on one thread: some milliseconds a pass, 250 passes.
     let args = [
         "render",
         "--width",
@@ -163,7 +163,7 @@ fn an_interrupted_progressive_render_writes_its_passes_and_resumes() {
         "--spp",
         "1",
         "--passes",
-        "1000",
+        "250",
         "--threads",
         "1",
         "-o",
@@ -172,12 +172,12 @@ fn an_interrupted_progressive_render_writes_its_passes_and_resumes() {
         &snaps,
     ];
     let err = interrupted(&args);
-    let k = number_between(&err, "whitted: interrupted after ", " of 1000 passes");
-    assert!((1..1000).contains(&k), "{err}");
+    let k = number_between(&err, "whitted: interrupted after ", " of 250 passes");
+    assert!((1..250).contains(&k), "{err}");
     assert_eq!(
         err,
         format!(
-            "whitted: interrupted after {k} of 1000 passes: wrote their mean to {out} and their sums to \
+            "whitted: interrupted after {k} of 250 passes: wrote their mean to {out} and their sums to \
              {out}.partial; the same command with --resume renders the rest\n"
         )
     );
@@ -201,13 +201,13 @@ fn an_interrupted_progressive_render_writes_its_passes_and_resumes() {
     let resumed = run(&[&args[..], &["--resume"]].concat());
     assert!(
         resumed.starts_with(&format!(
-            "whitted: resuming from {out}.partial: {k} of 1000 passes done\n"
+            "whitted: resuming from {out}.partial: {k} of 250 passes done\n"
         )),
         "{resumed}"
     );
     assert_eq!(common::names(d), ["c.png", "k.png", "snaps"]);
     run(&[
-        "render", "--width", "64", "--spp", "1", "--passes", "1000", "-q", "-o", &reference,
+        "render", "--width", "64", "--spp", "1", "--passes", "250", "-q", "-o", &reference,
     ]);
     assert!(
         std::fs::read(&out).unwrap() == std::fs::read(&reference).unwrap(),
