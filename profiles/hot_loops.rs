@@ -21,11 +21,11 @@ use whitted::accel::wide::Bvh4;
 use whitted::accel::{Accel, AccelKind, Hit, Prims};
 use whitted::geometry::ray::Ray;
 use whitted::kit::workload::{Workload, generate, packets_of};
-use whitted::render::{Kernel, Options, RayCounts, Renderer};
+use whitted::render::{Options, RayCounts, Renderer};
 use whitted::scene::Scene;
 
 const LOOPS: &str = "closest-primary, closest-diffuse, any-shadow, packet-primary, packet-shadow, \
-                     packet-diffuse, build-sah, shade, frame, frame-stream, each but the last four with the suffix -bvh8 \
+                     packet-diffuse, build-sah, shade, frame, each but the last three with the suffix -bvh8 \
                      (closest-primary-bvh8, ...), and with the `embree` feature each of those with -embree";
 const WIDTH: u32 = 320;
 const HEIGHT: u32 = 180;
@@ -89,7 +89,7 @@ fn run(name: &str) -> Result<(), String> {
         .num_threads(1)
         .build()
         .map_err(|e| e.to_string())?;
-    if name == "shade" || name.starts_with("frame") {
+    if name == "shade" || name == "frame" {
         let scene = load("scenes/dragon.p3f")?;
         // `shade` keeps the BVH4 it was first recorded with; `frame` is what `whitted render` runs.
         let kind = if name == "shade" {
@@ -100,13 +100,10 @@ fn run(name: &str) -> Result<(), String> {
         let accel = Accel::build(Prims::new(&scene), kind);
         let mut options = Options::new(&scene);
         (options.width, options.height) = (WIDTH, HEIGHT);
-        if name == "frame-stream" {
-            options.kernel = Kernel::Stream;
-        }
         let renderer = Renderer::new(&scene, &accel, options);
         let rays = pool.install(|| measured_render(&renderer));
         println!("rays {}", rays.total());
-        if name.starts_with("frame") {
+        if name == "frame" {
             // The counts by kind that profiles/frame.sh divides each phase by.
             let secondary = rays.reflected + rays.refracted;
             println!(

@@ -63,13 +63,7 @@ pub enum Verb {
     Single,
     /// Packets of 8 consecutive rays.
     Packets,
-    /// Streams of [`STREAM`] consecutive rays (or of the rays a thread is given, if fewer).
-    Streams,
 }
-
-/// Rays a stream: a batch of the stream kernel's frames (`whitted render --kernel stream` traces at
-/// most 4,096 pixel samples a generation).
-pub const STREAM: usize = 4096;
 
 /// The filter that runs the comparison table's rows alone: `cargo bench --bench kernels -- table`.
 pub const TABLE: &str = "table";
@@ -116,11 +110,10 @@ impl<'a> Ours<'a> {
     }
 
     /// Every structure of `built` with its single-ray kernel, and the wide BVHs with their packets too
-    /// (the others answer packets ray by ray: their rows would time single rays again) and, on
-    /// [`auto_set`], their streams. The BVH4 runs on `auto_set` alone: its kernels are the BVH8's code
-    /// at width 4, and what another instruction set changes shows in the BVH8's rows (as it does for
-    /// streams, whose rays pay the single-ray kernel's tests, in the single-ray rows). Embree, which the
-    /// kit lists with the `embree` feature, is a peer's: its rows are `embree.rs`'s.
+    /// (the others answer packets ray by ray: their rows would time single rays again). The BVH4 runs
+    /// on [`auto_set`] alone: its kernels are the BVH8's code at width 4, and what another instruction
+    /// set changes shows in the BVH8's rows. Embree, which the kit lists with the `embree` feature, is
+    /// a peer's: its rows are `embree.rs`'s.
     pub fn all(built: &'a [Built<'a>]) -> Vec<Ours<'a>> {
         let table = table_structures();
         let mut out = Vec::new();
@@ -133,14 +126,11 @@ impl<'a> Ours<'a> {
             let in_table = table.contains(&b.name);
             let mut push = |id: String, verb: Verb| {
                 let mut o = Ours::new(&id, &b.accel, verb);
-                o.table = in_table && verb != Verb::Streams;
+                o.table = in_table;
                 out.push(o);
             };
             if b.has_packet_kernel() {
                 push(format!("{id}-packets"), Verb::Packets);
-                if auto {
-                    push(format!("{id}-streams"), Verb::Streams);
-                }
             }
             push(id, Verb::Single);
         }
@@ -225,18 +215,6 @@ impl Ours<'_> {
                 tally(PACKET);
                 blocked
             }),
-            (Verb::Streams, false) => streams_of(rays, |r, t_max| {
-                let mut hits: Vec<Hit> = t_max.iter().map(|&t| Hit::miss(t)).collect();
-                verbs.intersect_stream(r, 0.0, &mut hits);
-                tally(r.len());
-                hits.iter().filter(|h| h.is_hit()).count()
-            }),
-            (Verb::Streams, true) => streams_of(rays, |r, t_max| {
-                let mut blocked = vec![false; r.len()];
-                verbs.occluded_stream(r, 0.0, t_max, &mut blocked);
-                tally(r.len());
-                blocked.iter().filter(|&&b| b).count()
-            }),
             (Verb::Single, false) => rays
                 .iter()
                 .filter(|(ray, t_max)| {
@@ -259,15 +237,4 @@ impl Ours<'_> {
         };
         (hits, steps.get())
     }
-}
-
-/// `count` over `rays` in streams of [`STREAM`], each given as its rays and their limits (gathered per
-/// stream, as a renderer holds them; the allocation is per stream, not per ray): the sum.
-fn streams_of(rays: &[Segment], count: impl Fn(&[Ray], &[f32]) -> usize) -> usize {
-    rays.chunks(STREAM)
-        .map(|s| {
-            let (r, t): (Vec<Ray>, Vec<f32>) = s.iter().copied().unzip();
-            count(&r, &t)
-        })
-        .sum()
 }

@@ -2,8 +2,8 @@
 //! visited (one box test of all the node's children: one SIMD slab test in the wide BVHs, two box
 //! tests in the BVH2; a grid cell walked; brute force's one pass over everything) and primitives
 //! tested. The counts live in this thread's lanes, one per ray of the verb's call (the ray of a
-//! single-ray verb is lane 0, a packet's ray `k` lane `k`, a stream's ray `i` lane `i`); a packet or
-//! stream visiting a node counts it once for each of its rays that take part. Every function is a
+//! single-ray verb is lane 0, a packet's ray `k` lane `k`); a packet visiting a node counts it once for
+//! each of its rays that take part. Every function is a
 //! no-op, compiled away, for the other policies.
 //!
 //! [`Counted`]: super::policy::Counted

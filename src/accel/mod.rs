@@ -1,11 +1,10 @@
 //! Accelerators. Each answers the same two questions (as tinybvh does on every layout): the closest hit
-//! along a ray and whether anything lies on a segment, for one ray (`intersect`, `occluded`), a packet
-//! of eight (`intersect_packet`, `occluded_packet`) or a stream of any number (`intersect_stream`,
-//! `occluded_stream`), and the closest hit of a coherent single ray (`intersect_coherent`, a camera
-//! ray: the same answer by steps that pay for such rays): seven verbs, dispatched in one place over
-//! the [`Structure`] trait, whose packet and stream verbs default to ray by ray. That shared interface
-//! is what lets every structure be checked against brute force with one loop, and lets the renderer
-//! send packets and streams without knowing which structure answers them.
+//! along a ray and whether anything lies on a segment, for one ray (`intersect`, `occluded`) or a
+//! packet of eight (`intersect_packet`, `occluded_packet`), and the closest hit of a coherent single
+//! ray (`intersect_coherent`, a camera ray: the same answer by steps that pay for such rays): five
+//! verbs, dispatched in one place over the [`Structure`] trait, whose packet verbs default to ray by
+//! ray. That shared interface is what lets every structure be checked against brute force with one
+//! loop, and lets the renderer send packets without knowing which structure answers them.
 
 pub mod brute;
 pub mod bvh2;
@@ -282,16 +281,6 @@ impl<'a> Accel<'a> {
     pub fn occluded_packet(&self, rays: &RayPacket, active: u8, t_min: f32, t_max: &[f32; PACKET]) -> u8 {
         Verbs::<Plain>::new(self).occluded_packet(rays, active, t_min, t_max)
     }
-
-    /// The closest hit of each ray of a stream ([`Verbs::intersect_stream`]).
-    pub fn intersect_stream(&self, rays: &[Ray], t_min: f32, hits: &mut [Hit]) {
-        Verbs::<Plain>::new(self).intersect_stream(rays, t_min, hits)
-    }
-
-    /// Whether each ray of a stream is blocked ([`Verbs::occluded_stream`]).
-    pub fn occluded_stream(&self, rays: &[Ray], t_min: f32, t_max: &[f32], occluded: &mut [bool]) {
-        Verbs::<Plain>::new(self).occluded_stream(rays, t_min, t_max, occluded)
-    }
 }
 
 /// Whether an accelerator's verbs count their steps: the hit policies they trace with.
@@ -326,7 +315,7 @@ impl Tally for Counting {
     type Any = Counted<AnyHit>;
 }
 
-/// An accelerator's seven verbs, written once for both [`Tally`]s.
+/// An accelerator's five verbs, written once for both [`Tally`]s.
 pub struct Verbs<'r, 'a, T> {
     accel: &'r Accel<'a>,
     tally: PhantomData<T>,
@@ -399,48 +388,4 @@ impl<'r, 'a, T: Tally> Verbs<'r, 'a, T> {
         let (t_min, mut hits) = (ahead(t_min), t_max.map(Hit::miss));
         each!(self.accel, s => Structure::traverse_packet::<T::Any>(s, rays, active, t_min, &mut hits))
     }
-
-    /// The closest hit of each ray of `rays` with `t` in `(t_min, hits[i].t)`, into `hits[i]` (a miss
-    /// leaves it as it was): [`Accel::intersect`] for each. The wide BVHs take the rays down the tree
-    /// together, as a stream split at each node (for many rays in any directions: the secondary rays of
-    /// a batch of tiles); the other structures answer ray by ray.
-    pub fn intersect_stream(&self, rays: &[Ray], t_min: f32, hits: &mut [Hit]) {
-        assert_eq!(rays.len(), hits.len(), "a hit per ray");
-        Self::lanes(rays.len());
-        let t_min = ahead(t_min);
-        with_spare(
-            rays.len(),
-            |_, found| each!(self.accel, s => Structure::traverse_stream::<T::Closest>(s, rays, t_min, hits, found)),
-        )
-    }
-
-    /// Whether each ray of `rays` hits anything with `t` in `(t_min, t_max[i])`, into `occluded[i]`:
-    /// [`Accel::occluded`] for each, as a stream where the structure has a stream kernel.
-    pub fn occluded_stream(&self, rays: &[Ray], t_min: f32, t_max: &[f32], occluded: &mut [bool]) {
-        assert!(
-            t_max.len() == rays.len() && occluded.len() == rays.len(),
-            "a distance and a flag per ray"
-        );
-        Self::lanes(rays.len());
-        let t_min = ahead(t_min);
-        with_spare(rays.len(), |hits, _| {
-            hits.iter_mut().zip(t_max).for_each(|(h, &t)| *h = Hit::miss(t));
-            each!(self.accel, s => Structure::traverse_stream::<T::Any>(s, rays, t_min, hits, occluded))
-        })
-    }
-}
-
-thread_local! {
-    /// A worker's spare hits and flags for the stream verbs (what the kernel fills that the verb does
-    /// not hand back), kept from stream to stream.
-    static SPARE: std::cell::RefCell<(Vec<Hit>, Vec<bool>)> = Default::default();
-}
-
-/// Runs `f` on `n` spare hits and flags of this worker (their values left from earlier streams).
-fn with_spare<R>(n: usize, f: impl FnOnce(&mut [Hit], &mut [bool]) -> R) -> R {
-    SPARE.with_borrow_mut(|(hits, found)| {
-        hits.resize(n, Hit::miss(0.0));
-        found.resize(n, false);
-        f(hits, found)
-    })
 }

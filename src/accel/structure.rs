@@ -1,8 +1,7 @@
 //! What every acceleration structure answers, written once as a trait so that [`super::Accel`]
-//! dispatches each verb in one place and a new structure is one implementation. The packet and
-//! stream verbs default to ray by ray; the wide BVHs (and Embree) override them with their kernels.
+//! dispatches each verb in one place and a new structure is one implementation. The packet verbs
+//! default to ray by ray; the wide BVHs (and Embree) override them with their kernels.
 
-use super::counters;
 use super::packet::{HitPacket, RayPacket, ray_by_ray};
 use super::policy::HitPolicy;
 use super::prims::{Hit, Prims};
@@ -53,13 +52,5 @@ pub trait Structure<'a> {
         hits: &mut HitPacket,
     ) -> u8 {
         ray_by_ray::<P>(active, |k| self.traverse::<P>(&rays[k], t_min, &mut hits[k]))
-    }
-
-    /// [`Structure::traverse`] for each ray of `rays`: `hits[i]` and `found[i]` are ray `i`'s.
-    fn traverse_stream<P: HitPolicy>(&self, rays: &[Ray], t_min: f32, hits: &mut [Hit], found: &mut [bool]) {
-        for (i, ((ray, hit), found)) in rays.iter().zip(hits).zip(found).enumerate() {
-            counters::at::<P>(i);
-            *found = self.traverse::<P>(ray, t_min, hit);
-        }
     }
 }

@@ -30,8 +30,8 @@ pub struct FrameArgs {
     /// auto (bvh8 on CPUs with AVX2, else bvh4) or embree (Embree 3; builds with `--features embree`).
     #[arg(long, default_value = "auto")]
     pub accel: AccelKind,
-    /// Rays one at a time (single), in packets of 8 neighbouring pixels (packet, BVH4 and BVH8), or a
-    /// few tiles' rays a generation at a time, as streams split at each node (stream); same image.
+    /// Rays one at a time (single) or in packets of 8 neighbouring pixels (packet, BVH4 and BVH8); same
+    /// image.
     #[arg(long, default_value = "packet")]
     pub kernel: Kernel,
 }

@@ -16,7 +16,7 @@ use super::setup::{load_scene, thread_pool, warn};
 #[command(after_help = "\
 Keys: W/A/S/D/Q/E move (forward, left, back, right, down, up); arrow keys turn; drag with the left \
 button to orbit the point looked at; the wheel zooms (field of view); R returns to the file's camera. \
-1-5: accelerator none/grid/bvh2/bvh4/bvh8 (6: embree, with the embree feature); K: single/packet/stream kernel; H: soft shadows; F: depth of field; \
+1-5: accelerator none/grid/bvh2/bvh4/bvh8 (6: embree, with the embree feature); K: single/packet kernel; H: soft shadows; F: depth of field; \
 [ and ]: fewer/more bounces; P: progressive refinement; C: cost heatmap (nodes visited, primitives tested, off; with its \
 legend); F12 or Ctrl-S: save the image; Escape: quit.")]
 pub struct ViewArgs {

@@ -16,7 +16,6 @@ use super::agreement::{Agreement, may_round_apart};
 use super::contestants::Contestant;
 use super::rays::Case;
 use crate::accel::packet::{self, bits};
-use crate::accel::wide::STREAM_MIN;
 use crate::accel::{Accel, AccelKind, Hit, PACKET, Prims};
 use crate::geometry::ray::Ray;
 
@@ -60,12 +59,11 @@ pub fn answers(reference: &Accel, cases: &[Case]) -> Vec<Hit> {
 }
 
 /// Checks `accel` against the reference answers `want` on `cases`, with single rays
-/// ([`check_single`]), with packets ([`check_packets`]) and with streams ([`check_streams`]). Panics at the first disagreement, with
+/// ([`check_single`]) and with packets ([`check_packets`]). Panics at the first disagreement, with
 /// `label`, the ray and both answers in the message.
 pub fn check(label: &str, accel: &Accel, agreement: Agreement, cases: &[Case], want: &[Hit]) -> Tally {
     let excused = check_single(label, accel, agreement, cases, want)
-        + check_packets(label, accel, agreement, cases, want)
-        + check_streams(label, accel, agreement, cases, want);
+        + check_packets(label, accel, agreement, cases, want);
     Tally {
         excused,
         ..Tally::of(want)
@@ -232,88 +230,6 @@ pub fn check_packets(
             );
         }
         excused.fetch_add(spared.count_ones() as usize, Ordering::Relaxed);
-    });
-    excused.into_inner()
-}
-
-/// Streams: the same cases through `intersect_stream` and `occluded_stream`, with the same expectations
-/// as [`check_single`]. The cases are grouped by `t_min` (a stream has one) and, in their own order
-/// (the kit's kinds of ray in turn, so directions of every octant side by side), cut into streams of
-/// 1, 3, [`STREAM_MIN`] − 1, [`STREAM_MIN`] and 1,000 rays in turn: ray by ray from the root, split at
-/// the root only, and split at many nodes. Returns the rays [`Agreement::Edges`] excused.
-pub fn check_streams(
-    label: &str,
-    accel: &Accel,
-    agreement: Agreement,
-    cases: &[Case],
-    want: &[Hit],
-) -> usize {
-    assert_eq!(cases.len(), want.len(), "{label}: one answer per case");
-    let prims = accel.prims();
-    let mut order: Vec<usize> = (0..cases.len()).collect();
-    order.sort_by_key(|&i| (cases[i].t_min.to_bits(), i));
-    let mut streams: Vec<&[usize]> = Vec::new();
-    for group in order.chunk_by(|&a, &b| cases[a].t_min == cases[b].t_min) {
-        let mut rest = group;
-        for &len in [1, 3, STREAM_MIN - 1, STREAM_MIN, 1000].iter().cycle() {
-            if rest.is_empty() {
-                break;
-            }
-            let (stream, tail) = rest.split_at(len.min(rest.len()));
-            streams.push(stream);
-            rest = tail;
-        }
-    }
-    let excused = AtomicUsize::new(0);
-    streams.par_iter().for_each(|ids| {
-        let t_min = cases[ids[0]].t_min;
-        let rays: Vec<Ray> = ids.iter().map(|&i| cases[i].ray).collect();
-        let mut hits: Vec<Hit> = ids.iter().map(|&i| Hit::miss(cases[i].t_max)).collect();
-        accel.intersect_stream(&rays, t_min, &mut hits);
-        let mut spared = vec![false; ids.len()];
-        for (j, &i) in ids.iter().enumerate() {
-            let (got, want, t_max) = (&hits[j], &want[i], cases[i].t_max);
-            let ctx = || {
-                format!(
-                    "{label}, stream of {}, ray {i} {:?} in ({t_min}, {t_max}): got {got:?}, reference {want:?}",
-                    ids.len(),
-                    rays[j]
-                )
-            };
-            spared[j] = agreement.spares_closest(&prims, (&rays[j], t_min, t_max), got, got.is_hit(), want, ctx);
-        }
-        // Any hit: each ray's questions in turn, a ray with fewer left out of the later pass.
-        let questions: Vec<([(f32, bool); 2], usize)> = ids
-            .iter()
-            .map(|&i| agreement.any_hit_limits(&cases[i], &want[i]))
-            .collect();
-        for pass in 0..2 {
-            let asked: Vec<usize> = (0..ids.len()).filter(|&j| pass < questions[j].1).collect();
-            let limits: Vec<f32> = asked.iter().map(|&j| questions[j].0[pass].0).collect();
-            let asked_rays: Vec<Ray> = asked.iter().map(|&j| rays[j]).collect();
-            let mut blocked = vec![false; asked.len()];
-            accel.occluded_stream(&asked_rays, t_min, &limits, &mut blocked);
-            for (a, &j) in asked.iter().enumerate() {
-                let expected = questions[j].0[pass].1;
-                if blocked[a] == expected || spared[j] {
-                    continue;
-                }
-                if agreement == Agreement::Edges && may_round_below(accel, (&rays[j], t_min, limits[a]), &want[ids[j]]) {
-                    spared[j] = true;
-                    continue;
-                }
-                panic!(
-                    "{label}, stream of {} any hit, pass {pass}: ray {} {:?} in ({t_min}, {}): blocked {}, \
-                     expected {expected}",
-                    ids.len(),
-                    ids[j],
-                    rays[j],
-                    limits[a],
-                    blocked[a]
-                );
-            }
-        }
-        excused.fetch_add(spared.iter().filter(|&&s| s).count(), Ordering::Relaxed);
     });
     excused.into_inner()
 }

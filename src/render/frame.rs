@@ -1,6 +1,6 @@
-//! What schedules a frame: its tiles on rayon, one job per tile (or per set of tiles for the stream
-//! kernel), each rendered by the chosen kernel (`super::kernel`) into a fixed-size buffer; a pass's
-//! tiles are gathered into a [`Film`] or handed to a caller that keeps a part of the frame.
+//! What schedules a frame: its tiles on rayon, one job per tile, each rendered by the chosen kernel
+//! (`super::kernel`) into a fixed-size buffer; a pass's tiles are gathered into a [`Film`] or handed to
+//! a caller that keeps a part of the frame.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -8,7 +8,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::film::Film;
-use super::kernel::{STREAM_TILES, TilePixels};
+use super::kernel::TilePixels;
 use super::options::Kernel;
 use super::renderer::Renderer;
 use super::tiles::{self, TILE, Tile};
@@ -61,62 +61,40 @@ impl Renderer<'_> {
         stop: &AtomicBool,
     ) -> TilePass {
         // Each tile fills a fixed-size buffer and each kernel keeps its per-tile state (sample
-        // patterns, stream buffers) from tile to tile, so nothing is allocated per pixel or per ray.
+        // patterns) from tile to tile, so nothing is allocated per pixel or per ray.
         //
-        // One job per tile, or per set of tiles traced together as streams (`with_max_len(1)`): tiles
-        // differ in cost by orders of magnitude (the dragon's glass and metal against empty sky), and
-        // rayon's adaptive split otherwise stops splitting after a few levels, leaving a worker folding
-        // a long run of expensive tiles that no idle worker can steal (`profiles/README.md`).
-        let kernel = self.options.kernel;
-        let per_job = if kernel == Kernel::Stream { STREAM_TILES } else { 1 };
-        let jobs: Vec<Vec<Option<TileDone>>> = tiles
-            .par_chunks(per_job)
+        // One job per tile (`with_max_len(1)`): tiles differ in cost by orders of magnitude (the
+        // dragon's glass and metal against empty sky), and rayon's adaptive split otherwise stops
+        // splitting after a few levels, leaving a worker folding a long run of expensive tiles that no
+        // idle worker can steal (`profiles/README.md`).
+        let tiles = tiles
+            .par_iter()
             .with_max_len(1)
-            .map(|set| {
+            .map(|&tile| {
                 if stop.load(Ordering::Relaxed) {
-                    return vec![None; set.len()];
+                    return None;
                 }
-                let mut bufs = vec![[Vec3::ZERO; (TILE * TILE) as usize]; set.len()];
-                let mut counts = vec![RayCounts::default(); set.len()];
+                let mut buf = [Vec3::ZERO; (TILE * TILE) as usize];
+                let mut rays = RayCounts::default();
                 // Each pixel's rays, where the render counts steps (for heatmaps).
-                let per_tile = (TILE * TILE) as usize;
                 let mut pixels = self
                     .whitted
                     .counts()
-                    .then(|| vec![RayCounts::default(); set.len() * per_tile]);
-                let first = pixels.as_deref_mut().map(|p| &mut p[..per_tile]);
-                match kernel {
-                    Kernel::Single => {
-                        self.tile_single(set[0], pass, &mut bufs[0], &mut counts[0], first, stop)
-                    }
-                    Kernel::Packet => {
-                        self.tile_packets(set[0], pass, &mut bufs[0], &mut counts[0], first, stop)
-                    }
-                    Kernel::Stream => {
-                        let all = pixels.as_deref_mut().unwrap_or_default();
-                        self.tiles_streamed(set, pass, &mut bufs, &mut counts, all, stop)
-                    }
+                    .then(|| vec![RayCounts::default(); (TILE * TILE) as usize]);
+                let per_pixel = pixels.as_deref_mut();
+                match self.options.kernel {
+                    Kernel::Single => self.tile_single(tile, pass, &mut buf, &mut rays, per_pixel, stop),
+                    Kernel::Packet => self.tile_packets(tile, pass, &mut buf, &mut rays, per_pixel, stop),
                 }
-                // A kernel stops within its tiles once `stop` is set (a tile of many samples a pixel
+                // A kernel stops within its tile once `stop` is set (a tile of many samples a pixel
                 // takes long): what it left may be half done, so none of it is kept.
                 if stop.load(Ordering::Relaxed) {
-                    return vec![None; set.len()];
+                    return None;
                 }
-                set.iter()
-                    .zip(bufs)
-                    .zip(counts)
-                    .enumerate()
-                    .map(|(i, ((&tile, buf), rays))| {
-                        on_tile();
-                        let mine = pixels
-                            .as_ref()
-                            .map(|p| p[i * per_tile..(i + 1) * per_tile].to_vec());
-                        Some((tile, buf, rays, mine))
-                    })
-                    .collect()
+                on_tile();
+                Some((tile, buf, rays, pixels))
             })
             .collect();
-        let tiles = jobs.into_iter().flatten().collect();
         TilePass { tiles }
     }
 }

@@ -3,16 +3,14 @@
 //! Where a ray goes, from the camera to the film:
 //! - [`frame`] schedules the image's [`tiles`] on rayon; per pixel, the [`Renderer`] draws the
 //!   samples ([`sampler`]: jittered positions, lens points, light points, random numbers) and makes
-//!   their camera rays ([`camera`]); a kernel (`kernel/`: single rays, packets or streams,
-//!   [`Kernel`]) traces and shades them;
+//!   their camera rays ([`camera`]); a kernel (`kernel/`: single rays or packets, [`Kernel`])
+//!   traces and shades them;
 //! - [`whitted`]: the integrator traces each ray through the accelerator
 //!   ([`crate::accel::Accel::intersect`]), shades the closest hit (Blinn-Phong over the light samples of
 //!   [`light`], each behind a shadow ray, [`crate::accel::Accel::occluded`]) and recurses into the
 //!   reflected and refracted rays ([`optics`]); a ray that leaves the scene sees the background
 //!   ([`env`](mod@env)). With [`Kernel::Packet`], `kernel/packet.rs` does the same for eight neighbouring
-//!   pixels at a time through the accelerators' packet verbs; with [`Kernel::Stream`],
-//!   `kernel/stream.rs` for the pixel samples of a few tiles at a time, generation by generation,
-//!   through their stream verbs;
+//!   pixels at a time through the accelerators' packet verbs;
 //! - the colours land in a linear [`film::Film`], or in a [`progressive::Progressive`] sum of passes,
 //!   written as an image at the end (or as a `.partial` part of a frame, [`crate::parts`]).
 

@@ -13,32 +13,25 @@ pub enum Kernel {
     /// ([`crate::accel::Accel::intersect_packet`]: the wide BVHs trace them together, the other
     /// structures ray by ray). The image is identical to `Single`'s.
     Packet,
-    /// The pixel samples of a few tiles traced together, generation by generation: all their camera
-    /// rays as one stream, then all their hits' shadow rays as one, then each sample's next secondary
-    /// ray as one ([`crate::accel::Accel::intersect_stream`]: the wide BVHs take a stream down the tree
-    /// split at each node, the other structures ray by ray). The image is identical to `Single`'s.
-    Stream,
 }
 
 impl Kernel {
     /// Every kernel (they render the same image).
-    pub const ALL: [Kernel; 3] = [Kernel::Single, Kernel::Packet, Kernel::Stream];
+    pub const ALL: [Kernel; 2] = [Kernel::Single, Kernel::Packet];
 
     /// What the kernel is called on the command line.
     pub fn name(self) -> &'static str {
         match self {
             Kernel::Single => "single",
             Kernel::Packet => "packet",
-            Kernel::Stream => "stream",
         }
     }
 
-    /// The next kernel in turn (the viewer's key): single, packet, stream, single.
+    /// The other kernel (the viewer's key): single, packet, single.
     pub fn next(self) -> Kernel {
         match self {
             Kernel::Single => Kernel::Packet,
-            Kernel::Packet => Kernel::Stream,
-            Kernel::Stream => Kernel::Single,
+            Kernel::Packet => Kernel::Single,
         }
     }
 }
@@ -50,10 +43,7 @@ impl std::str::FromStr for Kernel {
         match s {
             "single" => Ok(Kernel::Single),
             "packet" => Ok(Kernel::Packet),
-            "stream" => Ok(Kernel::Stream),
-            _ => Err(format!(
-                "unknown kernel \"{s}\": expected single, packet or stream"
-            )),
+            _ => Err(format!("unknown kernel \"{s}\": expected single or packet")),
         }
     }
 }
@@ -175,8 +165,7 @@ mod tests {
             assert_eq!(k.name().parse::<Kernel>(), Ok(k));
         }
         assert_eq!(Kernel::Single.next(), Kernel::Packet);
-        assert_eq!(Kernel::Packet.next(), Kernel::Stream);
-        assert_eq!(Kernel::Stream.next(), Kernel::Single);
+        assert_eq!(Kernel::Packet.next(), Kernel::Single);
         assert!("wavefront".parse::<Kernel>().is_err());
     }
 

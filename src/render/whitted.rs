@@ -39,7 +39,7 @@ pub struct ShadowRay {
 impl ShadowRay {
     /// The shadow ray from `p` (geometric normal `ng`, shading normal `ns`) to `light`, or `None` when
     /// the light is behind the shading normal (it then adds nothing, neither diffuse nor highlight). The
-    /// single-ray path builds its shadow rays here, the packet and stream kernels the same rays in
+    /// single-ray path builds its shadow rays here, the packet kernel the same rays in
     /// lanes (`kernel/shade.rs`).
     #[inline]
     pub fn new(p: Vec3, ng: Vec3, ns: Vec3, light: &LightSample) -> Option<Self> {

@@ -69,7 +69,7 @@ pub enum Key {
     Reset,
     /// 1 to 5 (6: Embree, with the `embree` feature): the accelerator.
     Accel(AccelKind),
-    /// K: single rays, packets, streams, in turn.
+    /// K: single rays or packets, in turn.
     Kernel,
     /// H: soft shadows (sampled quad lights) or the quad lights' regular grids.
     SoftShadows,

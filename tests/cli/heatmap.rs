@@ -51,7 +51,7 @@ fn brute_force_tests_every_primitive_for_every_camera_ray() {
         .iter()
         .map(|k| info[*k].as_u64().unwrap())
         .sum();
-    for kernel in ["single", "packet", "stream"] {
+    for kernel in ["single", "packet"] {
         let [png, exr, json] = heatmap(
             d,
             kernel,

@@ -447,7 +447,7 @@ fn wait_with_cpu(mut child: Child) -> (i32, f64, String) {
 fn ctrl_c_stops_within_a_long_tile() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("l.png").to_string_lossy().into_owned();
-    for kernel in ["packet", "single", "stream"] {
+    for kernel in ["packet", "single"] {
         let child = spawn(&[
             "render",
             "--width",

@@ -168,7 +168,7 @@ fn kernels_give_the_same_bytes_and_an_unknown_one_is_a_usage_error() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let mut images = Vec::new();
-    for kernel in ["single", "packet", "stream"] {
+    for kernel in ["single", "packet"] {
         let args = small(DEFAULT, &["--kernel", kernel, "--accel", "bvh4", "--spp", "4"]);
         images.push(bytes(&render(d, &format!("{kernel}.png"), &args)));
         assert_eq!(stats(d, &args)["kernel"], kernel);
@@ -181,8 +181,8 @@ fn kernels_give_the_same_bytes_and_an_unknown_one_is_a_usage_error() {
     assert_eq!(stats(d, &small(DEFAULT, &[]))["kernel"], "packet");
     render_usage(
         &small(DEFAULT, &["--kernel", "simd"]),
-        "error: invalid value 'simd' for '--kernel <KERNEL>': unknown kernel \"simd\": expected single, \
-         packet or stream",
+        "error: invalid value 'simd' for '--kernel <KERNEL>': unknown kernel \"simd\": expected single \
+         or packet",
     );
 }
 

@@ -34,7 +34,7 @@ fn counts_are_the_same_on_any_threads_and_the_image_unchanged() {
     let scene = whitted::scene::load(&common::root().join("scenes/default.p3f")).unwrap();
     for kind in [AccelKind::Grid, AccelKind::Bvh2, AccelKind::Bvh4, AccelKind::Bvh8] {
         let accel = Accel::build(Prims::new(&scene), kind);
-        for kernel in [Kernel::Single, Kernel::Packet, Kernel::Stream] {
+        for kernel in Kernel::ALL {
             let (plain, plain_rays) = render(&scene, &accel, kernel, 1, false);
             assert_eq!(
                 plain_rays.steps,
@@ -71,7 +71,7 @@ fn brute_force_counts_every_primitive_for_every_ray() {
     let scene = whitted::scene::load(&common::root().join("scenes/default.p3f")).unwrap();
     let accel = Accel::build(Prims::new(&scene), AccelKind::None);
     let n = u64::from(Prims::new(&scene).total());
-    for kernel in [Kernel::Single, Kernel::Packet, Kernel::Stream] {
+    for kernel in Kernel::ALL {
         let (_, rays) = render(&scene, &accel, kernel, 2, true);
         let s = rays.steps;
         assert_eq!(

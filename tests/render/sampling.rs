@@ -242,8 +242,6 @@ fn sampled_renders_are_reproducible_across_threads_and_kernels() {
     assert!(bytes(2, Kernel::Single) == reference, "1 vs 2 threads");
     assert!(bytes(1, Kernel::Packet) == reference, "packet vs single");
     assert!(bytes(2, Kernel::Packet) == reference, "packet on 2 threads");
-    assert!(bytes(1, Kernel::Stream) == reference, "stream vs single");
-    assert!(bytes(2, Kernel::Stream) == reference, "stream on 2 threads");
 }
 
 /// Progressive passes average to what many samples converge to: the regular soft shadow's value within

@@ -225,7 +225,7 @@ fn bad_option_values_are_usage_errors() {
         (
             &["--kernel", "simd"],
             "error: invalid value 'simd' for '--kernel <KERNEL>': unknown kernel \"simd\": expected \
-             single, packet or stream",
+             single or packet",
         ),
         (
             &["--threads", "0"],

@@ -5,9 +5,9 @@
 //!
 //! One structure and one collapse (`collapse.rs`) serve both widths: [`Bvh4`] (4 lanes of SSE, the
 //! default where the CPU lacks AVX2) and [`Bvh8`] (8 lanes: one AVX2 register where the CPU has AVX2,
-//! detected at run time, else two SSE halves). Their kernels are a triad, each written once for both
-//! widths, both hit policies and every instruction set: one ray (`single.rs`), a packet of eight
-//! (`packet.rs`) and a stream of many (`stream.rs`). All three test boxes with the one slab test
+//! detected at run time, else two SSE halves). Their kernels are a pair, each written once for both
+//! widths, both hit policies and every instruction set: one ray (`single.rs`) and a packet of eight
+//! (`packet.rs`). Both test boxes with the one slab test
 //! (`slab.rs`) on the SIMD lanes (`lanes/`) of the instruction set chosen at run time (`isa.rs`),
 //! order the children they enter by `order.rs`, and test leaves four or eight triangles at a time
 //! (`tri4.rs`). Wider nodes mean fewer node visits and fewer stack operations per ray (`profiles/`).
@@ -19,11 +19,9 @@ mod order;
 mod packet;
 mod single;
 mod slab;
-mod stream;
 pub mod tri4;
 
 pub use isa::Isa;
-pub use stream::STREAM_MIN;
 
 use glam::Vec3;
 
@@ -284,17 +282,6 @@ macro_rules! wide_structure {
                 hits: &mut HitPacket,
             ) -> u8 {
                 $bvh::traverse_packet::<P>(self, rays, active, t_min, hits)
-            }
-
-            #[inline(always)]
-            fn traverse_stream<P: HitPolicy>(
-                &self,
-                rays: &[Ray],
-                t_min: f32,
-                hits: &mut [Hit],
-                found: &mut [bool],
-            ) {
-                $bvh::traverse_stream::<P>(self, rays, t_min, hits, found)
             }
         }
     };

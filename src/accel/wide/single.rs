@@ -124,8 +124,7 @@ impl<const W: usize> WideBvh<'_, W> {
 
     /// The single-ray traversal of the subtree under `start` (not [`EMPTY`]) for `ray`, prepared as
     /// `r`, with `t_min` already [`ahead`]: sets `found` on a hit and returns true if the search is over
-    /// (any-hit found one). [`WideBvh::single`] starts it at the root, the stream kernel wherever its
-    /// stream has thinned to a ray or two.
+    /// (any-hit found one). [`WideBvh::single`] starts it at the root.
     #[inline(always)]
     pub(super) fn descend<P: HitPolicy, L: Lanes<W>, T: Lanes8>(
         &self,

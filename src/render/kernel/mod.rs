@@ -1,14 +1,13 @@
-//! The three ways a tile's pixel samples are traced and shaded, one file each ([`Kernel`]): one ray at a
-//! time (`single`), eight neighbouring pixels' rays as packets (`packet`), or the samples of a few
-//! tiles together as streams, generation by generation (`stream`). All three give the same image, bit
-//! for bit: each shades with the single-ray integrator's own code (`super::whitted`) from the same rays.
+//! The two ways a tile's pixel samples are traced and shaded, one file each ([`Kernel`]): one ray at a
+//! time (`single`) or eight neighbouring pixels' rays as packets (`packet`). Both give the same image,
+//! bit for bit: each shades with the single-ray integrator's own code (`super::whitted`) from the same
+//! rays.
 //!
 //! [`Kernel`]: super::Kernel
 
 mod packet;
 mod shade;
 mod single;
-mod stream;
 
 use glam::Vec3;
 
@@ -18,10 +17,6 @@ use crate::geometry::ray::Ray;
 
 /// A tile's pixels, row-major at a stride of [`TILE`].
 pub(super) type TilePixels = [Vec3; (TILE * TILE) as usize];
-
-/// Tiles a stream job traces together: 1,024 camera rays a generation at one sample per pixel
-/// (against 1 and 16: `profiles/README.md`, tuned constants).
-pub(super) const STREAM_TILES: usize = 4;
 
 /// The block of pixels whose camera rays make a packet: 4 wide, `PACKET / 4` = 2 high.
 const BLOCK_W: u32 = 4;
@@ -35,7 +30,7 @@ type PerRay<T> = [T; PACKET];
 const MIN_LANES: u32 = 2;
 
 /// Whether `rays` (up to a packet's worth) are worth tracing as a packet: at least [`MIN_LANES`] of
-/// them, their directions all in one octant. The packet and stream kernels both group by this rule.
+/// them, their directions all in one octant.
 fn coherent<'r>(mut rays: impl Iterator<Item = &'r Ray>) -> bool {
     let octant = |r: &Ray| r.dir.cmplt(Vec3::ZERO).bitmask();
     let Some(first) = rays.next().map(octant) else {

@@ -148,41 +148,6 @@ impl HitLanes {
         })
     }
 
-    /// The hits `surface(k)` (none: a dead lane) of rays with directions `dir(k)`, as they lie;
-    /// `None` if no lane holds a hit. Inlined into its callers, so that the eight hits go straight
-    /// from where they lie into the lanes.
-    #[inline(always)]
-    pub fn of_surfaces<'s>(
-        scene: &Scene,
-        dir: impl Fn(usize) -> Vec3,
-        surface: impl Fn(usize) -> Option<&'s Surface>,
-    ) -> Option<Self> {
-        let (mut p, mut ng, mut ns) = ([Vec3::ZERO; PACKET], [Vec3::ZERO; PACKET], [Vec3::ZERO; PACKET]);
-        let mut t = [0.0; PACKET];
-        let mut ids = [MaterialId::MAX; PACKET];
-        let (mut live, mut inside) = (0u8, 0u8);
-        for k in 0..PACKET {
-            if let Some(s) = surface(k) {
-                (t[k], p[k], ng[k], ns[k], ids[k]) = (s.t, s.point, s.geometric, s.shading, s.material);
-                live |= 1 << k;
-                inside |= u8::from(s.inside) << k;
-            }
-        }
-        let first = bits(live).next()?;
-        let ids = ids.map(|id| if id == MaterialId::MAX { ids[first] } else { id });
-        Some(HitLanes {
-            t: f32x8::from(t),
-            p: Vec3x8::from_lanes(&p),
-            ng: Vec3x8::from_lanes(&ng),
-            ns: Vec3x8::from_lanes(&ns),
-            dir: Vec3x8::from_fn(dir),
-            m: Materials::gather(scene, &ids),
-            ids,
-            inside,
-            live,
-        })
-    }
-
     /// The lanes whose ray hit the back of its surface.
     #[inline]
     pub fn inside(&self) -> u8 {
