@@ -2,8 +2,8 @@
 //! criterion's throughput: one loop over the contestants × the ray sets × one thread and all of them.
 //! The contestants: every structure of the test kit (`whitted::kit::contestants`) with its single-ray
 //! kernel, the wide BVHs with their packet kernel (8 consecutive rays a packet) too, the BVH8 on every
-//! instruction set and the others on the one `auto` picks (`Ours::all`); obvhs 0.4's CWBVH and BVH2 (`very_slow_build`, its best
-//! trees, traced with our triangle test); with `--features bench-embree`, Embree 3's single rays and
+//! instruction set and the others on the one `auto` picks (`Ours::all`); obvhs 0.4's CWBVH and BVH2
+//! (`very_slow_build`, its best trees, traced with our triangle test); with `--features bench-embree`, Embree 3's single rays and
 //! 8-wide packets on its high-quality (spatial split) BVH, through the library's binding
 //! (`whitted::accel::embree`); with `--features bench-tinybvh`, tinybvh's BVH8_CPU (needs
 //! `RUSTFLAGS="-C target-cpu=native"`, `tinybvh.rs`). The ray sets: primary rays (closest hit, our

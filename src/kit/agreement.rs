@@ -21,8 +21,8 @@ pub enum Agreement {
     /// ([`may_round_apart`]: a hit within [`EDGE`] of a triangle's edge, or at the ray's origin, or
     /// hits whose `t`s are ill-conditioned): there a structure with its own triangle test (Embree's)
     /// may round the other way, onto the neighbour, through a crack of ours or to another `t`, and such
-    /// a ray is counted ([`Tally::excused`](super::oracle::Tally::excused)) rather than failed. Anything else must agree as for
-    /// `Close`.
+    /// a ray is counted ([`Tally::excused`](super::oracle::Tally::excused)) rather than failed.
+    /// Anything else must agree as for `Close`.
     Edges,
 }
 
@@ -161,7 +161,8 @@ impl Agreement {
 
     /// Judges a batch kernel's closest hit `got` (`found`: whether the kernel said it hit) of `ray` in
     /// `(t_min, t_max)` against `want`: true when [`Agreement::Edges`] excuses a disagreement
-    /// ([`may_round_apart`]), else asserts agreement as [`check_single`](super::oracle::check_single) does.
+    /// ([`may_round_apart`]), else asserts agreement as
+    /// [`check_single`](super::oracle::check_single) does.
     pub(super) fn spares_closest(
         self,
         prims: &Prims,

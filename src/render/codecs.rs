@@ -254,70 +254,8 @@ pub(crate) fn write_exr(out: &mut dyn Write, width: u32, height: u32, pixels: &[
     Ok(())
 }
 
-/// Images read back in tests: 8-bit ones through [`Decoder`] (PNG, JPEG) or Netpbm's P6 header, EXR
-/// through the `exr` crate's decoder.
+/// Images read back in tests, by the integration tests' decoders (apart from these writers).
 #[cfg(test)]
-pub(crate) mod read_back {
-    use std::path::Path;
-
-    /// An image's pixels as 8-bit RGB, row-major.
-    #[derive(Debug)]
-    pub(crate) struct Rgb8 {
-        width: u32,
-        height: u32,
-        data: Vec<u8>,
-    }
-
-    impl Rgb8 {
-        pub(crate) fn width(&self) -> u32 {
-            self.width
-        }
-
-        pub(crate) fn height(&self) -> u32 {
-            self.height
-        }
-
-        pub(crate) fn dimensions(&self) -> (u32, u32) {
-            (self.width, self.height)
-        }
-
-        pub(crate) fn get_pixel(&self, x: u32, y: u32) -> [u8; 3] {
-            assert!(x < self.width && y < self.height, "({x}, {y}) outside the image");
-            let i = 3 * (y as usize * self.width as usize + x as usize);
-            [self.data[i], self.data[i + 1], self.data[i + 2]]
-        }
-    }
-
-    /// A PNG, JPEG or P6 PPM file's pixels.
-    pub(crate) fn rgb8(path: &Path) -> Rgb8 {
-        let bytes = std::fs::read(path).unwrap();
-        if let Some(rest) = bytes.strip_prefix(b"P6\n") {
-            // The writer's header: "P6\nW H\n255\n".
-            let mut lines = rest.splitn(3, |&b| b == b'\n');
-            let size = std::str::from_utf8(lines.next().unwrap()).unwrap();
-            assert_eq!(lines.next(), Some(&b"255"[..]), "maxval");
-            let (width, height) = size.split_once(' ').unwrap();
-            let (width, height) = (width.parse().unwrap(), height.parse().unwrap());
-            let data = lines.next().unwrap().to_vec();
-            assert_eq!(data.len(), 3 * (width * height) as usize, "samples");
-            return Rgb8 { width, height, data };
-        }
-        let decoder = super::Decoder::open(std::fs::File::open(path).unwrap(), path).unwrap();
-        let (width, height) = decoder.dimensions();
-        let data = decoder.decode_rgb8().unwrap();
-        Rgb8 { width, height, data }
-    }
-
-    /// An OpenEXR file's linear RGB, row-major.
-    pub(crate) fn exr(path: &Path) -> Vec<[f32; 3]> {
-        let image = exr::prelude::read_first_rgba_layer_from_file(
-            path,
-            |size, _| (size.width(), vec![[0.0; 3]; size.area()]),
-            |(width, pixels), at, (r, g, b, _): (f32, f32, f32, f32)| {
-                pixels[at.y() * *width + at.x()] = [r, g, b]
-            },
-        )
-        .unwrap();
-        image.layer_data.channel_data.pixels.1
-    }
-}
+#[path = "../../tests/common/images.rs"]
+#[allow(dead_code)] // Each test uses a part.
+pub(crate) mod read_back;

@@ -301,10 +301,14 @@ mod tests {
         writer.finish().unwrap();
         assert_eq!(face("p.png"), [40, 50, 60, 10, 20, 30]);
         let jpeg = d.join("j.png");
-        jpeg_encoder::Encoder::new_file(&jpeg, 95)
-            .unwrap()
-            .encode(&[200, 100, 50].repeat(64), 8, 8, jpeg_encoder::ColorType::Rgb)
-            .unwrap();
+        crate::render::codecs::write_jpeg(
+            &mut File::create(&jpeg).unwrap(),
+            8,
+            8,
+            &[200, 100, 50].repeat(64),
+            95,
+        )
+        .unwrap();
         for p in face("j.png").chunks_exact(3) {
             let near = |a: u8, b: u8| a.abs_diff(b) <= 3;
             assert!(near(p[0], 200) && near(p[1], 100) && near(p[2], 50), "{p:?}");

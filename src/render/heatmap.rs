@@ -635,7 +635,7 @@ mod tests {
         ] {
             let map = row(vec![10.0, 20.0, 30.0, 40.0], scale(s));
             map.write_png(&path).unwrap();
-            let img = read_back::rgb8(&path);
+            let img = read_back::rgb(&path);
             let x0 = (img.width() - 4) / 2;
             let ramp = map.ramp();
             for (x, (&v, t)) in map.values.iter().zip(want).enumerate() {
@@ -650,7 +650,7 @@ mod tests {
     }
 
     fn read_exr_max(path: &Path) -> f32 {
-        read_back::exr(path).iter().map(|p| p[0]).fold(0.0, f32::max)
+        read_back::exr(path).2.iter().map(|p| p[0]).fold(0.0, f32::max)
     }
 
     #[test]
@@ -696,13 +696,13 @@ mod tests {
         gradient(640, 480, 1000.0, "BVH nodes tested per pixel")
             .write_png(&path)
             .unwrap();
-        let img = read_back::rgb8(&path);
+        let img = read_back::rgb(&path);
         assert_eq!(img.dimensions(), (640, 480 + LEGEND_HEIGHT));
         // Wide images get the font at twice the size.
         gradient(1024, 8, 10.0, "rays traced per pixel")
             .write_png(&path)
             .unwrap();
-        let img = read_back::rgb8(&path);
+        let img = read_back::rgb(&path);
         assert_eq!(img.dimensions(), (1024, 8 + 2 * LEGEND_HEIGHT));
         assert_eq!(
             std::fs::read_dir(dir.path()).unwrap().count(),
@@ -727,7 +727,7 @@ mod tests {
             scale: LINEAR,
         };
         map.write_png(&path).unwrap();
-        let img = read_back::rgb8(&path);
+        let img = read_back::rgb(&path);
         // The canvas is wider than the image (the legend's numbers need room): the image is centred.
         let x0 = (img.width() - w) / 2;
         assert!(img.width() > w);
@@ -758,7 +758,7 @@ mod tests {
         };
         map.write_png(&path).unwrap();
         assert_eq!(map.ramp().labels(), ["0"; 5]);
-        let img = read_back::rgb8(&path);
+        let img = read_back::rgb(&path);
         let x0 = (img.width() - 40) / 2;
         for y in 0..30 {
             for x in x0..x0 + 40 {
@@ -785,7 +785,7 @@ mod tests {
             map.scale = Scale::default();
             let path = dir.path().join(format!("{w}x{h}.png"));
             map.write_png(&path).unwrap();
-            let img = read_back::rgb8(&path);
+            let img = read_back::rgb(&path);
             assert_eq!(img.height(), h + LEGEND_HEIGHT);
             // The label fits at full 8-pixel size with a margin, and the five numbers side by side.
             assert!(

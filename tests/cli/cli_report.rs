@@ -563,7 +563,7 @@ fn spd_render(file: &str) -> Value {
         "-o",
         image.to_str().unwrap(),
     ]);
-    assert_eq!(common::rgb(&image).dimensions(), (512, 512));
+    assert_eq!(common::images::rgb(&image).dimensions(), (512, 512));
     v
 }
 

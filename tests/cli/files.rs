@@ -261,10 +261,10 @@ fn outputs_named_by_an_extension_alone_or_at_the_length_limit_are_written() {
     common::failed(&sh(d, &format!("exec \"$W\" render {s} -q -o .png")), 0);
     let png = std::fs::read(d.join(".png")).unwrap();
     assert!(png.starts_with(b"\x89PNG"));
-    assert_eq!(common::decode_rgb8(&png).unwrap().width(), 32);
+    assert_eq!(common::images::decode_rgb8(&png).unwrap().width(), 32);
     let long = format!("{}.png", "n".repeat(245));
     common::failed(&sh(d, &format!("exec \"$W\" render {s} -q -o {long}")), 0);
-    assert!(common::rgb(&d.join(&long)).width() == 32);
+    assert!(common::images::rgb(&d.join(&long)).width() == 32);
     assert_eq!(common::names(d), [".png".to_string(), long, "s.p3f".into()]);
 }
 

@@ -9,11 +9,12 @@ use std::path::Path;
 use serde_json::Value;
 use whitted::render::heatmap::{Heatmap, Ramp, Scale, nearest_rank, viridis};
 
-use crate::common::{self, fails, json, rgb, stdout};
+use crate::common::images::rgb;
+use crate::common::{self, fails, json, stdout};
 
 /// The raw counts of a heatmap's `.exr` (one value per pixel, in all three channels).
 fn counts(path: &Path) -> (u32, u32, Vec<f32>) {
-    let (width, height, pixels) = common::exr(path);
+    let (width, height, pixels) = common::images::exr(path);
     let values = pixels.iter().map(|p| {
         assert!(p[0] == p[1] && p[1] == p[2], "{p:?}");
         p[0]

@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
-use crate::common::{self, fails, int, json, ok, rgb, root, stdout};
+use crate::common::images::rgb;
+use crate::common::{self, fails, int, json, ok, root, stdout};
 
 /// The built-in scene's file: a glass ball, a mirror ball (no roughness given), a copper box and a red
 /// ball on a floor, 640x480, spp 0.
@@ -328,7 +329,7 @@ fn srgb_encodes_with_the_srgb_curve_and_says_so_in_the_png() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let args = small(DEFAULT, &["--spp", "4"]);
-    let (width, height, linear) = common::exr(&render(d, "linear.exr", &args));
+    let (width, height, linear) = common::images::exr(&render(d, "linear.exr", &args));
     let plain = render(d, "linear.png", &args);
     let encoded = render(d, "srgb.png", &[&args[..], &["--srgb"]].concat());
     let (plain_px, encoded_px) = (rgb(&plain), rgb(&encoded));

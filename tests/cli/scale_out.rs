@@ -16,7 +16,7 @@ fn path(dir: &Path, name: &str) -> String {
 
 /// The linear pixels of an EXR, exactly.
 fn exr(path: &str) -> Vec<f32> {
-    common::exr(std::path::Path::new(path)).2.into_flattened()
+    common::images::exr(std::path::Path::new(path)).2.into_flattened()
 }
 
 /// Renders `opts` whole to `single.{png,exr}`, and in the `parts` given (each its own extra arguments,

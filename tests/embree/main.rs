@@ -339,7 +339,7 @@ mod with_embree {
                     let out_s = out.to_str().unwrap();
                     let args = ["render", scene, "-q", "--accel", accel, "--kernel", kernel];
                     run_ok(&[&args[..], extra, &["-o", out_s]].concat());
-                    common::rgb(&out).data
+                    common::images::rgb(&out).data
                 };
                 let (ours, embree) = (image("bvh8"), image("embree"));
                 let (d, n) = (differing(&ours, &embree), ours.len() / 3);

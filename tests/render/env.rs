@@ -111,7 +111,7 @@ fn shipped_faces_are_the_formula() {
         let bytes = std::fs::read(&path).unwrap();
         assert!(bytes.starts_with(b"\x89PNG"), "{name}.png is not a PNG");
         // 8-bit RGB, or the decoder says what it is.
-        let img = common::decode_rgb8(&bytes).unwrap_or_else(|e| panic!("{name}.png: {e}"));
+        let img = common::images::decode_rgb8(&bytes).unwrap_or_else(|e| panic!("{name}.png: {e}"));
         assert_eq!(img.dimensions(), (SIZE, SIZE), "{name}");
         for y in 0..SIZE {
             for x in 0..SIZE {
@@ -272,7 +272,7 @@ fn a_missing_skybox_warns_and_renders_the_background_colour() {
             dir.path().join("missing_dir").display()
         )
     );
-    let img = common::rgb(&out);
+    let img = common::images::rgb(&out);
     assert_eq!(img.dimensions(), (8, 6));
     // 0.2, 0.4, 0.6 times 255, rounded.
     assert!(img.pixels().all(|p| p == [51, 102, 153]), "{img:?}");
@@ -303,7 +303,7 @@ fn a_course_scene_renders_its_sky() {
         !err.contains("environment map") && !err.contains("skybox"),
         "{err}"
     );
-    let sky = common::rgb(&out);
+    let sky = common::images::rgb(&out);
     assert_eq!(sky.dimensions(), (64, 64));
 
     // The same frame without the skybox (spp 0 in the file: one ray a pixel, so a miss is exactly bclr).
@@ -393,7 +393,7 @@ fn renders_the_background_colour(dir: &Path, kib: u64, face: &str, warning: &str
             face.display()
         )
     );
-    assert!(common::rgb(&out).pixels().all(|p| p == [51, 102, 153]));
+    assert!(common::images::rgb(&out).pixels().all(|p| p == [51, 102, 153]));
 }
 
 /// A face that is a FIFO (opened for reading, it waits for a writer) or a link to `/dev/zero` (a JPEG

@@ -175,7 +175,7 @@ fn cli_renders_the_default_scene() {
     let out = dir.path().join("default.png");
     let run = common::whitted(&["render", "-o", out.to_str().unwrap(), "--width", "80", "--quiet"]);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    let img = common::rgb(&out);
+    let img = common::images::rgb(&out);
     assert_eq!((img.width(), img.height()), (80, 60));
     let bad = dir.path().join("nowhere").join("x.png");
     let run = common::whitted(&["render", "-o", bad.to_str().unwrap(), "--width", "8", "--quiet"]);

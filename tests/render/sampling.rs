@@ -371,7 +371,7 @@ fn cli_progressive_snapshots_and_spp_rounding() {
         out.to_str().unwrap(),
     ]);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    common::rgb(&out);
+    common::images::rgb(&out);
     let mut names: Vec<String> = std::fs::read_dir(&snaps)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

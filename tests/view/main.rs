@@ -205,8 +205,8 @@ fn under_xvfb_the_scripted_frames_are_render_passes() {
     );
 }
 
-fn read(path: &Path) -> common::Rgb8 {
-    common::rgb(path)
+fn read(path: &Path) -> common::images::Rgb8 {
+    common::images::rgb(path)
 }
 
 /// Out-of-range or unknown values are usage errors (exit status 2) named by clap, before any window.

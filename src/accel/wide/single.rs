@@ -126,7 +126,7 @@ impl<const W: usize> WideBvh<'_, W> {
     /// `r`, with `t_min` already [`ahead`]: sets `found` on a hit and returns true if the search is over
     /// (any-hit found one). [`WideBvh::single`] starts it at the root.
     #[inline(always)]
-    pub(super) fn descend<P: HitPolicy, L: Lanes<W>, T: Lanes8>(
+    fn descend<P: HitPolicy, L: Lanes<W>, T: Lanes8>(
         &self,
         start: ChildRef,
         ray: &Ray,

@@ -37,7 +37,7 @@ impl Whitted<'_> {
     /// the closest hits as a packet, then their shadow rays and secondary rays as packets. Each lane
     /// draws its random numbers from its own sample, in the order the single-ray path draws them (its
     /// bounce here, then its refracted ray's tree, then its reflected ray's).
-    pub(super) fn shade_packet(
+    fn shade_packet(
         &self,
         rays: &PerRay<Ray>,
         active: u8,
