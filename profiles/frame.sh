@@ -13,11 +13,14 @@ for tool in valgrind callgrind_annotate python3; do
     }
 done
 cd "$root"
+# Rust's v0 symbol names keep generic arguments, which tell the shading's lanes bodies apart
+# (frame_phases.py); built apart from the other scripts' binary, so that neither rebuilds the other's.
+export RUSTFLAGS="-C symbol-mangling-version=v0" CARGO_TARGET_DIR="$root/target/frame"
 cargo build --profile profiling --example hot_loops --features hot-loops --quiet
 tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 valgrind --tool=callgrind --callgrind-out-file="$tmp/frame.out" --toggle-collect='*measured_*' \
-    target/profiling/examples/hot_loops frame >"$tmp/counts" 2>"$tmp/log" || {
+    "$CARGO_TARGET_DIR"/profiling/examples/hot_loops frame >"$tmp/counts" 2>"$tmp/log" || {
     cat "$tmp/log" >&2
     exit 1
 }

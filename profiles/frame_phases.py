@@ -6,7 +6,9 @@ A phase is the inclusive cost of the functions it runs in: the accelerator's ver
 inlined into the integrator (the packet verbs reach their AVX2 kernel through a `#[target_feature]`
 function, the single-ray closest-hit verbs are `#[inline(never)]`), so traversal is measured exactly, and its ray kind is
 told by the caller: the integrator's packet routine at its first level traces the camera rays, its
-recursive levels (callgrind's `'2`) the reflected and refracted ones.
+recursive levels (callgrind's `'2`) the reflected and refracted ones. Names are Rust's v0 mangling
+(frame.sh builds with it): generic functions carry their arguments, so that the shading's bodies,
+each run on its lanes through `Lanes::call` (`with_avx2::<_, ...::{closure#0}>`), are told apart.
 """
 
 import re
@@ -20,6 +22,28 @@ def name(text):
     text = re.sub(r" \[[^]]*\]$", "", text.strip())
     text = re.sub(r" \([\d,]+x\)$", "", text)
     return text.split(":", 1)[1] if ":" in text else text
+
+
+def base(f):
+    """A function's path without its trailing generic arguments (`f::<A, B>` is `f`)."""
+    f = re.sub(r"'\d+$", "", f)
+    f = re.sub(r"^<([^<>]*)>::", r"\1::", f)
+    while f.endswith(">") and "::<" in f:
+        depth, i = 0, len(f) - 1
+        while i >= 0:
+            depth += {">": 1, "<": -1}.get(f[i], 0)
+            if depth == 0:
+                break
+            i -= 1
+        if f[i - 2 : i] != "::":
+            break
+        f = f[: i - 2]
+    return f
+
+
+def recursive(f):
+    """Whether `f` is a recursive call's level (callgrind's `'2` and deeper)."""
+    return re.search(r"'\d+$", f) is not None
 
 
 def blocks(path):
@@ -57,10 +81,11 @@ def main():
     def verb(f, suffix):
         # A verb is `Accel::<verb>` or, written once for both tallies, `Verbs<...>::<verb>`.
         name = suffix.removeprefix("Accel")
+        f = base(f)
         return f.endswith(suffix) or ("Verbs<" in f and f.endswith(">" + name))
 
     def inclusive(suffix):
-        return sum(c for f, (c, _) in functions.items() if verb(f, suffix))
+        return sum(c for f, (c, _) in functions.items() if not recursive(f) and verb(f, suffix))
 
     def called_by(suffix, caller_test):
         return sum(
@@ -71,8 +96,8 @@ def main():
             if caller_test(caller)
         )
 
-    first_level = lambda c: c.endswith("shade_packet")  # noqa: E731
-    deeper = lambda c: "shade_packet'" in c  # noqa: E731
+    first_level = lambda c: "shade_packet" in c and not recursive(c)  # noqa: E731
+    deeper = lambda c: "shade_packet" in c and recursive(c)  # noqa: E731
     phases = [
         ("camera rays and their samples (Renderer::camera_packet)", inclusive("::camera_packet"), "primary"),
         ("sample patterns (PixelPattern::fill, spp > 1 only)", inclusive("PixelPattern::fill"), "primary"),
@@ -89,13 +114,13 @@ def main():
         ),
         (
             "hit points: position, normals (HitLanes::of_hits, Prims::surface)",
-            inclusive("HitLanes::of_hits") + inclusive("Prims::surface"),
+            inclusive(">::of_hits") + inclusive("Prims::surface"),
             "all",
         ),
         (
             "shading in lanes: shadow rays' set-up, Blinn-Phong (local_packet)",
             inclusive("::local_packet")
-            - called_by("Accel::occluded_packet", lambda c: c.endswith("::local_packet")),
+            - called_by("Accel::occluded_packet", lambda c: "local_packet" in c),
             "all",
         ),
     ]

@@ -28,6 +28,12 @@ pub use packet::{HitPacket, PACKET, RayPacket};
 pub use prims::{Hit, PrimKind, Prims, Surface};
 pub use structure::Structure;
 pub use wide::Isa;
+pub(crate) use wide::Simd;
+
+/// The SIMD lanes the wide BVHs' kernels run on, shared with the renderer's shading.
+pub(crate) mod lanes {
+    pub(crate) use super::wide::{Lanes, Lanes8, OnLanes8};
+}
 
 use crate::geometry::ray::{Ray, ahead};
 use brute::Brute;

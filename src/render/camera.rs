@@ -1,11 +1,10 @@
 //! Primary rays: the pinhole (and, with an aperture, thin-lens) camera of the `v` block.
 
 use glam::{Vec2, Vec3};
-use wide::f32x8;
 
 use crate::geometry::length_and_direction;
 use crate::geometry::ray::Ray;
-use crate::render::lanes::Vec3x8;
+use crate::render::lanes::{Fx, Lanes, V3};
 use crate::scene::Camera;
 
 /// A camera ready to generate rays: an orthonormal frame and the view-plane scale, computed once.
@@ -61,7 +60,7 @@ impl RayCamera {
     /// pixel), with a unit direction.
     #[inline]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
-        Ray::new(self.eye, self.through(x, y).normalize())
+        self.rays::<f32, 1>([x], [y])[0]
     }
 
     /// The thin-lens ray (Cook et al. 1984; Potmesil and Chakravarty 1981) through image point
@@ -79,18 +78,14 @@ impl RayCamera {
         Ray::new(origin, (focus - origin).normalize())
     }
 
-    /// The pinhole rays through image points `(x[k], y[k])`, eight at once: [`ray`](Self::ray)'s
-    /// operations lane by lane in its order (IEEE arithmetic and square roots are exact per lane, and
-    /// Rust never fuses them), so the same bits.
-    #[inline]
-    pub fn rays8(&self, x: [f32; 8], y: [f32; 8]) -> [Ray; 8] {
-        let s = f32x8::splat;
-        let sx = (s(2.0) * f32x8::from(x) / s(self.width as f32) - s(1.0)) * s(self.half.0);
-        let sy = (s(1.0) - s(2.0) * f32x8::from(y) / s(self.height as f32)) * s(self.half.1);
-        let through =
-            Vec3x8::splat(self.forward) + Vec3x8::splat(self.right) * sx + Vec3x8::splat(self.up) * sy;
-        let d = through.normalize();
-        std::array::from_fn(|k| Ray::new(self.eye, d.lane(k)))
+    /// The pinhole rays through image points `(x[k], y[k])`, `N` at once: [`ray`](Self::ray) in lanes.
+    #[inline(always)]
+    pub(crate) fn rays<L: Lanes<N>, const N: usize>(&self, x: [f32; N], y: [f32; N]) -> [Ray; N] {
+        let d = self
+            .through_lanes::<L, N>(Fx::from(x), Fx::from(y))
+            .normalize()
+            .lanes();
+        std::array::from_fn(|k| Ray::new(self.eye, d[k]))
     }
 
     /// The ray of a sample that passes through image point `at`: from lens point `lens` where the
@@ -106,9 +101,16 @@ impl RayCamera {
     /// The direction through image point `(x, y)`, scaled to reach the plane one unit ahead.
     #[inline]
     fn through(&self, x: f32, y: f32) -> Vec3 {
-        let sx = (2.0 * x / self.width as f32 - 1.0) * self.half.0;
-        let sy = (1.0 - 2.0 * y / self.height as f32) * self.half.1;
-        self.forward + sx * self.right + sy * self.up
+        self.through_lanes::<f32, 1>(Fx(x), Fx(y)).lanes()[0]
+    }
+
+    /// [`through`](Self::through) in lanes.
+    #[inline(always)]
+    fn through_lanes<L: Lanes<N>, const N: usize>(&self, x: Fx<L, N>, y: Fx<L, N>) -> V3<L, N> {
+        let s = Fx::<L, N>::splat;
+        let sx = (s(2.0) * x / s(self.width as f32) - s(1.0)) * s(self.half.0);
+        let sy = (s(1.0) - s(2.0) * y / s(self.height as f32)) * s(self.half.1);
+        V3::splat(self.forward) + V3::splat(self.right) * sx + V3::splat(self.up) * sy
     }
 }
 
@@ -166,9 +168,20 @@ mod tests {
         );
     }
 
-    /// Eight pinhole rays at once are the single rays, bit for bit, all over the image and beyond it.
+    /// Eight pinhole rays at once, on every lane type the CPU runs, are the single rays, bit for bit,
+    /// all over the image and beyond it.
     #[test]
     fn rays_in_lanes_are_the_single_rays() {
+        use crate::accel::lanes::{Lanes8, OnLanes8};
+        use crate::accel::{Isa, Simd};
+
+        struct Eight<'a>(&'a RayCamera, [f32; 8], [f32; 8]);
+        impl OnLanes8 for Eight<'_> {
+            type Output = [Ray; 8];
+            fn run<L: Lanes8>(self) -> [Ray; 8] {
+                self.0.rays::<L, 8>(self.1, self.2)
+            }
+        }
         let cam = Camera::new(
             Vec3::new(2.3, 1.6, 1.1),
             Vec3::new(0.1, -0.2, 0.0),
@@ -179,17 +192,22 @@ mod tests {
         );
         let rc = RayCamera::new(&cam, 800, 600);
         let mut rng = crate::render::sampler::Sampler::new(5, 1, 0, 1);
-        for _ in 0..1000 {
-            let x: [f32; 8] = std::array::from_fn(|_| rng.uniform() * 900.0 - 50.0);
-            let y: [f32; 8] = std::array::from_fn(|_| rng.uniform() * 700.0 - 50.0);
-            let lanes = rc.rays8(x, y);
-            for k in 0..8 {
-                let one = rc.ray(x[k], y[k]);
-                assert_eq!(
-                    lanes[k].dir.to_array().map(f32::to_bits),
-                    one.dir.to_array().map(f32::to_bits)
-                );
-                assert_eq!(lanes[k].origin, one.origin);
+        for simd in [Isa::Portable, Isa::Avx2, Isa::Avx512]
+            .into_iter()
+            .filter_map(Simd::new)
+        {
+            for _ in 0..1000 {
+                let x: [f32; 8] = std::array::from_fn(|_| rng.uniform() * 900.0 - 50.0);
+                let y: [f32; 8] = std::array::from_fn(|_| rng.uniform() * 700.0 - 50.0);
+                let lanes = simd.run8(Eight(&rc, x, y));
+                for k in 0..8 {
+                    let one = rc.ray(x[k], y[k]);
+                    assert_eq!(
+                        lanes[k].dir.to_array().map(f32::to_bits),
+                        one.dir.to_array().map(f32::to_bits)
+                    );
+                    assert_eq!(lanes[k].origin, one.origin);
+                }
             }
         }
     }

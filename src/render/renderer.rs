@@ -15,7 +15,7 @@ use super::env::Background;
 use super::options::Options;
 use super::sampler::{PixelKey, PixelPattern, Sampler};
 use super::whitted::{PixelSample, RayKind, SampleRays, Whitted};
-use crate::accel::Accel;
+use crate::accel::{Accel, Simd};
 use crate::digest::mix;
 use crate::geometry::ray::Ray;
 use crate::scene::{Camera, Scene};
@@ -36,6 +36,8 @@ pub struct Renderer<'a> {
     /// Whether a pixel sample's own generator is ever drawn from (a lens, or a rough mirror): where it
     /// is not, it is not seeded either, and the image is the same.
     draws: bool,
+    /// The instruction set the packet kernel's tiles run on: the wide BVH's, else the CPU's best.
+    simd: Simd,
     /// What the renderer fell back on (a skybox that did not load, say), for the user to see.
     pub warnings: Vec<String>,
 }
@@ -104,6 +106,7 @@ impl<'a> Renderer<'a> {
             centre: if options.spd { 0.0 } else { 0.5 },
             seed_key: mix(options.seed),
             draws,
+            simd: accel.simd().and_then(Simd::new).unwrap_or_else(Simd::detect),
             options,
             warnings,
         }
@@ -182,6 +185,11 @@ impl<'a> Renderer<'a> {
             None
         };
         (corner + p, lens, sample)
+    }
+
+    /// The instruction set the packet kernel's tiles run on.
+    pub(super) fn simd(&self) -> Simd {
+        self.simd
     }
 
     /// The camera, for the kernels' rays.

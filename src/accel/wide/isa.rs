@@ -38,13 +38,13 @@ impl Isa {
 /// by [`Simd::new`], after asking the CPU.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) struct Detected {
+pub(crate) struct Detected {
     _private: (),
 }
 
 /// A checked instruction set: what the kernels dispatch on, once per ray or packet.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Simd {
+pub(crate) enum Simd {
     /// `wide`'s lanes: any CPU.
     Portable,
     /// AVX2, FMA, BMI1 and POPCNT, with the proof that the CPU has them.

@@ -22,6 +22,8 @@ mod slab;
 pub mod tri4;
 
 pub use isa::Isa;
+pub(crate) use isa::Simd;
+pub(crate) use lanes::{Lanes, Lanes8, OnLanes8};
 
 use glam::Vec3;
 
@@ -34,7 +36,6 @@ use super::prims::{Hit, Prims};
 use super::structure::Structure;
 use crate::geometry::aabb::Aabb;
 use crate::geometry::ray::Ray;
-use isa::Simd;
 
 /// A child reference: an interior node's index, a leaf, or [`EMPTY`]. A leaf is
 /// `LEAF | start << COUNT_BITS | count`, with [`TRIANGLES`] set when it holds triangles: then `start` is

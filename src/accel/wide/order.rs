@@ -11,7 +11,7 @@ use crate::accel::stack::Stack;
 /// the child first, so that an entry is one 64-bit lane of the AVX-512 child order ([`network_avx512`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(8))]
-pub(super) struct Visit {
+pub(crate) struct Visit {
     pub child: ChildRef,
     pub t: f32,
 }

@@ -10,172 +10,182 @@
 //! [`Whitted::bounces`]: crate::render::whitted::Whitted::bounces
 
 use glam::Vec3;
-use wide::f32x8;
 
-use super::PerRay;
-use crate::accel::packet::{PACKET, bits};
 use crate::accel::{Hit, PrimKind, Prims, Surface};
 use crate::geometry::ray::Ray;
-use crate::render::lanes::{Vec3x8, lane_mask, positive};
+use crate::render::lanes::{Fx, Gather, Lanes, V3, each, full};
 use crate::render::light::Lights;
-use crate::render::optics::{clamp01, reflect8, refract8, schlick8};
+use crate::render::optics::{reflect_lanes, refract_lanes, schlick_lanes};
 use crate::render::whitted::EPSILON;
 use crate::scene::{Material, MaterialId, NO_NORMALS, Scene};
 
-/// Up to eight hits in lanes: where they lie, their normals, the rays' directions and their
+/// Up to `N` hits in lanes: where they lie, their normals, the rays' directions and their
 /// materials.
-pub(super) struct HitLanes {
-    t: f32x8,
-    p: Vec3x8,
-    ng: Vec3x8,
-    ns: Vec3x8,
-    dir: Vec3x8,
+pub(super) struct HitLanes<L, const N: usize> {
+    t: Fx<L, N>,
+    p: V3<L, N>,
+    ng: V3<L, N>,
+    ns: V3<L, N>,
+    dir: V3<L, N>,
     /// Each lane's material (a dead lane holds a live lane's).
-    ids: PerRay<MaterialId>,
-    m: Materials,
+    ids: [MaterialId; N],
+    m: Materials<L, N>,
     /// The lanes whose ray hit the back of its surface ([`Surface::inside`]).
-    inside: u8,
+    inside: u32,
     /// The lanes that hold a hit.
-    live: u8,
+    live: u32,
 }
 
 /// One light sample seen from the hits of a [`HitLanes`].
-pub(super) struct ShadowLanes {
+pub(super) struct ShadowLanes<L, const N: usize> {
     /// The light sample's positions.
-    at: Vec3x8,
+    at: V3<L, N>,
     /// Unit directions toward the light, and their cosines with the shading normals.
-    l: Vec3x8,
-    n_dot_l: f32x8,
+    l: V3<L, N>,
+    n_dot_l: Fx<L, N>,
     /// The live lanes whose light lies in front of the shading normal: those whose shadow rays are
     /// traced (the others add nothing, as `ShadowRay::new` returns none for them).
-    pub lit: u8,
+    pub lit: u32,
 }
 
 /// One kind of secondary ray spawned by the hits of a [`HitLanes`] ([`HitLanes::bounces`]).
-pub(super) struct Spawned {
+pub(super) struct Spawned<L, const N: usize> {
     /// The lanes that spawn one.
-    pub lanes: u8,
+    pub lanes: u32,
     /// Where the rays start (just off the surface), their unit directions and their weights.
-    pub origin: Vec3x8,
-    pub dir: Vec3x8,
-    pub weight: f32x8,
+    pub origin: V3<L, N>,
+    pub dir: V3<L, N>,
+    pub weight: Fx<L, N>,
 }
 
-impl Spawned {
-    const NONE: Spawned = Spawned {
-        lanes: 0,
-        origin: Vec3x8::ZERO,
-        dir: Vec3x8::ZERO,
-        weight: f32x8::ZERO,
-    };
+impl<L: Lanes<N>, const N: usize> Spawned<L, N> {
+    #[inline(always)]
+    fn none() -> Self {
+        Spawned {
+            lanes: 0,
+            origin: V3::zero(),
+            dir: V3::zero(),
+            weight: Fx::splat(0.0),
+        }
+    }
 }
 
-impl HitLanes {
+impl<L: Lanes<N>, const N: usize> HitLanes<L, N> {
     /// The surfaces at the closest hits `hits` of `rays` in the lanes of `live`, computed in lanes
     /// ([`Prims::surface`]'s operations in its order): a triangle's normals from its edges and vertex
     /// normals gathered lane by lane, other kinds' normals lane by lane. `None` if no lane is live.
-    // Not inlined: a phase of `profiles/frame.sh`, called once a packet.
+    // Not inlined: a phase of `profiles/frame.sh`, called once a packet (its body on the frame's
+    // lanes, `Lanes::call`).
     #[inline(never)]
-    pub fn of_hits(prims: &Prims, rays: &PerRay<Ray>, hits: &PerRay<Hit>, live: u8) -> Option<Self> {
-        let first = bits(live).next()?;
-        let tris = &prims.scene.triangles;
-        // Every array cut to one length: one bounds check a lane.
-        let n = tris.material.len();
-        let (edge1, edge2) = (tris.e1.first(n), tris.e2.first(n));
-        let (material, normals) = (&tris.material[..n], &tris.normals[..n]);
-        // Gathered straight into the lanes: each triangle's edges and vertex normals, and the other
-        // kinds' normals.
-        let (mut e1, mut e2) = (Vec3x8::ZERO, Vec3x8::ZERO);
-        let mut corners = [Vec3x8::ZERO; 3];
-        let (mut u, mut v) = (f32x8::ZERO, f32x8::ZERO);
-        let (mut other_ng, mut other_ns) = (Vec3x8::ZERO, Vec3x8::ZERO);
-        let mut ids = [MaterialId::MAX; PACKET];
-        // Lanes on triangles with vertex normals, and lanes on other kinds of primitive.
-        let (mut smooth, mut other) = (0u8, 0u8);
-        for k in bits(live) {
-            let hit = &hits[k];
-            if let PrimKind::Triangle(i) = prims.kind(hit.prim) {
-                e1.set(k, edge1.get(i));
-                e2.set(k, edge2.get(i));
-                ids[k] = material[i];
-                if normals[i] != NO_NORMALS {
-                    let n = &tris.vertex_normals[normals[i] as usize];
-                    for (corner, n) in corners.iter_mut().zip(n) {
-                        corner.set(k, *n);
+    pub fn of_hits(prims: &Prims, rays: &[Ray; N], hits: &[Hit; N], live: u32) -> Option<Self> {
+        L::call(
+            #[inline(always)]
+            || {
+                let first = each(live).next()?;
+                let tris = &prims.scene.triangles;
+                // Every array cut to one length: one bounds check a lane.
+                let n = tris.material.len();
+                let (edge1, edge2) = (tris.e1.first(n), tris.e2.first(n));
+                let (material, normals) = (&tris.material[..n], &tris.normals[..n]);
+                // Gathered lane by lane, then loaded: each triangle's edges and vertex normals, and the
+                // other kinds' normals.
+                let (mut e1, mut e2) = (Gather::ZERO, Gather::ZERO);
+                let mut corners = [Gather::ZERO, Gather::ZERO, Gather::ZERO];
+                let (mut u, mut v) = ([0.0; N], [0.0; N]);
+                let (mut other_ng, mut other_ns) = (Gather::ZERO, Gather::ZERO);
+                let mut ids = [MaterialId::MAX; N];
+                // Lanes on triangles with vertex normals, and lanes on other kinds of primitive.
+                let (mut smooth, mut other) = (0u32, 0u32);
+                for k in each(live) {
+                    let hit = &hits[k];
+                    if let PrimKind::Triangle(i) = prims.kind(hit.prim) {
+                        e1.set(k, edge1.get(i));
+                        e2.set(k, edge2.get(i));
+                        ids[k] = material[i];
+                        if normals[i] != NO_NORMALS {
+                            let n = &tris.vertex_normals[normals[i] as usize];
+                            for (corner, n) in corners.iter_mut().zip(n) {
+                                corner.set(k, *n);
+                            }
+                            (u[k], v[k]) = (hit.u, hit.v);
+                            smooth |= 1 << k;
+                        }
+                    } else {
+                        let (ng, ns, id) = prims.normals(rays[k].at(hit.t), hit);
+                        other_ng.set(k, ng);
+                        other_ns.set(k, ns);
+                        ids[k] = id;
+                        other |= 1 << k;
                     }
-                    (u.as_mut_array()[k], v.as_mut_array()[k]) = (hit.u, hit.v);
-                    smooth |= 1 << k;
                 }
-            } else {
-                let (ng, ns, id) = prims.normals(rays[k].at(hit.t), hit);
-                other_ng.set(k, ng);
-                other_ns.set(k, ns);
-                ids[k] = id;
-                other |= 1 << k;
-            }
-        }
-        let dir = Vec3x8::from_fn(|k| rays[k].dir);
-        let t = f32x8::from(std::array::from_fn::<_, PACKET, _>(|k| hits[k].t));
-        let p = Vec3x8::from_fn(|k| rays[k].origin) + dir * t;
-        let mut ng = e1.cross(e2).normalize_or_zero();
-        let mut ns = ng;
-        if smooth != 0 {
-            // Each vertex normal turned to the geometric normal's side, then interpolated.
-            let [n0, n1, n2] = corners.map(|n| Vec3x8::select(n.dot(ng).simd_lt(f32x8::ZERO), -n, n));
-            let smoothed = (n0 * (f32x8::ONE - u - v) + n1 * u + n2 * v).normalize_or_zero();
-            ns = Vec3x8::select(lane_mask(smooth & smoothed.finite()), smoothed, ng);
-        }
-        if other != 0 {
-            let other = lane_mask(other);
-            ng = Vec3x8::select(other, other_ng, ng);
-            ns = Vec3x8::select(other, other_ns, ns);
-        }
-        // Two-sided: both normals turned toward the incoming ray.
-        let back = dir.dot(ng).simd_gt(f32x8::ZERO);
-        let sign = back.select(f32x8::splat(-1.0), f32x8::ONE);
-        // Dead lanes take a live lane's material: most packets then share one.
-        let ids = ids.map(|id| if id == MaterialId::MAX { ids[first] } else { id });
-        Some(HitLanes {
-            t,
-            p,
-            ng: ng * sign,
-            ns: ns * sign,
-            dir,
-            m: Materials::gather(prims.scene, &ids),
-            ids,
-            inside: live & back.to_bitmask() as u8,
-            live,
-        })
+                let dir = V3::from_lanes(&rays.each_ref().map(|r| r.dir));
+                let t = Fx::from(hits.each_ref().map(|h| h.t));
+                let p = V3::from_lanes(&rays.each_ref().map(|r| r.origin)) + dir * t;
+                let mut ng = e1.load::<L>().cross(e2.load()).normalize_or_zero();
+                let mut ns = ng;
+                if smooth != 0 {
+                    // Each vertex normal turned to the geometric normal's side, then interpolated.
+                    let [n0, n1, n2] = corners.each_ref().map(|n| {
+                        let n = n.load::<L>();
+                        V3::blend(n.dot(ng).lt(Fx::splat(0.0)), -n, n)
+                    });
+                    let (u, v) = (Fx::from(u), Fx::from(v));
+                    let smoothed = (n0 * (Fx::splat(1.0) - u - v) + n1 * u + n2 * v).normalize_or_zero();
+                    ns = V3::blend(smooth & smoothed.finite(), smoothed, ng);
+                }
+                if other != 0 {
+                    ng = V3::blend(other, other_ng.load(), ng);
+                    ns = V3::blend(other, other_ns.load(), ns);
+                }
+                // Two-sided: both normals turned toward the incoming ray.
+                let back = dir.dot(ng).positive();
+                let sign = Fx::blend(back, Fx::splat(-1.0), Fx::splat(1.0));
+                // Dead lanes take a live lane's material: most packets then share one.
+                let ids = ids.map(|id| if id == MaterialId::MAX { ids[first] } else { id });
+                Some(HitLanes {
+                    t,
+                    p,
+                    ng: ng * sign,
+                    ns: ns * sign,
+                    dir,
+                    m: Materials::gather(prims.scene, &ids),
+                    ids,
+                    inside: live & back,
+                    live,
+                })
+            },
+        )
     }
 
     /// The lanes whose ray hit the back of its surface.
     #[inline]
-    pub fn inside(&self) -> u8 {
+    pub fn inside(&self) -> u32 {
         self.inside
     }
 
     /// The lanes whose material transmits.
     #[inline]
-    pub fn transmits(&self) -> u8 {
+    pub fn transmits(&self) -> u32 {
         self.m.transmits
     }
 
     /// The live lanes whose material passes `test`: one test where the lanes share a material.
     #[inline]
-    pub fn materials_where(&self, test: impl Fn(MaterialId) -> bool) -> u8 {
+    pub fn materials_where(&self, test: impl Fn(MaterialId) -> bool) -> u32 {
         match self.m.shared {
-            Some(id) => self.live & 0u8.wrapping_sub(u8::from(test(id))),
-            None => bits(self.live).fold(0, |m, k| m | u8::from(test(self.ids[k])) << k),
+            Some(id) => self.live & 0u32.wrapping_sub(u32::from(test(id))),
+            None => each(self.live).fold(0, |m, k| m | u32::from(test(self.ids[k])) << k),
         }
     }
 
     /// Lane `k`'s surface, as [`Prims::surface`] gives it.
+    #[inline(always)]
     pub fn surface(&self, k: usize) -> Surface {
         Surface {
-            t: self.t.as_array()[k],
-            point: self.p.lane(k),
-            geometric: self.ng.lane(k),
-            shading: self.ns.lane(k),
+            t: self.t.to_array()[k],
+            point: self.p.lanes()[k],
+            geometric: self.ng.lanes()[k],
+            shading: self.ns.lanes()[k],
             material: self.ids[k],
             inside: self.inside >> k & 1 == 1,
         }
@@ -187,11 +197,12 @@ impl HitLanes {
     /// mirror), under the SPD's rules with `spd`.
     ///
     /// [`Whitted::bounces`]: crate::render::whitted::Whitted::bounces
-    #[inline]
-    pub fn bounces(&self, scene: &Scene, lanes: u8, spd: bool) -> [Spawned; 2] {
-        let (m, d, eps) = (&self.m, self.dir, f32x8::splat(EPSILON));
-        let (mut kr, mut total, mut transmission) = (f32x8::ONE, f32x8::ZERO, f32x8::ZERO);
-        let mut refracted = Spawned::NONE;
+    #[inline(always)]
+    pub fn bounces(&self, scene: &Scene, lanes: u32, spd: bool) -> [Spawned<L, N>; 2] {
+        let (m, d, eps) = (&self.m, self.dir, Fx::splat(EPSILON));
+        let one = Fx::splat(1.0);
+        let (mut kr, mut total, mut transmission) = (one, 0, Fx::splat(0.0));
+        let mut refracted = Spawned::none();
         let glass = lanes & m.transmits;
         if glass != 0 {
             // Gathered here, not with the shading's materials: few packets hit a transmitter.
@@ -199,41 +210,40 @@ impl HitLanes {
             (transmission, ior) = match m.shared {
                 Some(id) => {
                     let one = &scene.materials[id as usize];
-                    (f32x8::splat(one.transmission), f32x8::splat(one.ior))
+                    (Fx::splat(one.transmission), Fx::splat(one.ior))
                 }
                 None => {
                     let each = self.ids.map(|id| &scene.materials[id as usize]);
                     (
-                        f32x8::from(each.map(|m| m.transmission)),
-                        f32x8::from(each.map(|m| m.ior)),
+                        Fx::from(each.map(|m| m.transmission)),
+                        Fx::from(each.map(|m| m.ior)),
                     )
                 }
             };
-            let inside = lane_mask(self.inside);
-            let (eta_i, eta_t) = (inside.select(ior, f32x8::ONE), inside.select(f32x8::ONE, ior));
-            let fresnel = schlick8(clamp01(-d.dot(self.ns)), eta_i, eta_t);
-            let (t, all_reflected) = refract8(d, self.ns, eta_i / eta_t);
-            total = lane_mask(glass) & all_reflected;
-            kr = lane_mask(glass).select(total.select(f32x8::ONE, fresnel), f32x8::ONE);
-            let weight = transmission * (f32x8::ONE - kr);
-            let kept = if spd { !0 } else { positive(weight) };
+            let (eta_i, eta_t) = (Fx::blend(self.inside, ior, one), Fx::blend(self.inside, one, ior));
+            let fresnel = schlick_lanes((-d.dot(self.ns)).clamp01(), eta_i, eta_t);
+            let (t, all_reflected) = refract_lanes(d, self.ns, eta_i / eta_t);
+            total = glass & all_reflected;
+            kr = Fx::blend(glass & !total, fresnel, one);
+            let weight = transmission * (one - kr);
+            let kept = if spd { full::<N>() } else { weight.positive() };
             refracted = Spawned {
-                lanes: glass & !(total.to_bitmask() as u8) & kept,
+                lanes: glass & !total & kept,
                 origin: self.p - self.ng * eps,
                 dir: t.normalize(),
                 weight,
             };
         }
         let weight = if spd {
-            total.select(m.ks + transmission, m.ks * kr)
+            Fx::blend(total, m.ks + transmission, m.ks * kr)
         } else {
             m.ks * kr
         };
-        let kept = positive(weight) | if spd { m.transmits } else { 0 };
+        let kept = weight.positive() | if spd { m.transmits } else { 0 };
         let reflected = Spawned {
             lanes: lanes & kept,
             origin: self.p + self.ng * eps,
-            dir: reflect8(d, self.ns).normalize(),
+            dir: reflect_lanes(d, self.ns).normalize(),
             weight,
         };
         [refracted, reflected]
@@ -241,24 +251,25 @@ impl HitLanes {
 
     /// Light sample positions `at` seen from the hits: the directions toward them and which lanes
     /// they light (`ShadowRay::new` in lanes, up to its ray).
-    #[inline]
-    pub fn toward(&self, at: Vec3x8) -> ShadowLanes {
+    #[inline(always)]
+    pub fn toward(&self, at: V3<L, N>) -> ShadowLanes<L, N> {
         let l = (at - self.p).normalize();
         let n_dot_l = self.ns.dot(l);
         ShadowLanes {
             at,
             l,
             n_dot_l,
-            lit: self.live & positive(n_dot_l),
+            lit: self.live & n_dot_l.positive(),
         }
     }
 
     /// The shadow rays of `light`, from just off each surface on the light's side, and the distances
     /// to the light (`ShadowRay::new`'s ray and distance in lanes).
-    #[inline]
-    pub fn shadow_rays(&self, light: &ShadowLanes) -> (PerRay<Ray>, [f32; PACKET]) {
-        let eps = f32x8::splat(EPSILON);
-        let origin = self.p + self.ng * self.ng.dot(light.l).simd_ge(f32x8::ZERO).select(eps, -eps);
+    #[inline(always)]
+    pub fn shadow_rays(&self, light: &ShadowLanes<L, N>) -> ([Ray; N], [f32; N]) {
+        let eps = Fx::splat(EPSILON);
+        let side = Fx::blend(self.ng.dot(light.l).ge(Fx::splat(0.0)), eps, -eps);
+        let origin = self.p + self.ng * side;
         let distance = (light.at - origin).length().to_array();
         let (origins, dirs) = (origin.lanes(), light.l.lanes());
         (std::array::from_fn(|k| Ray::new(origins[k], dirs[k])), distance)
@@ -266,8 +277,8 @@ impl HitLanes {
 
     /// Adds the light sample `toward`, of colour `light`, to `color` in the lanes of `seen` (lit
     /// and not blocked): Kd·Cd·(n·L), plus Ks·Cs·(n·h)^shine where Ks > 0.
-    #[inline]
-    pub fn add_light(&self, color: &mut Vec3x8, toward: &ShadowLanes, seen: u8, light: Vec3) {
+    #[inline(always)]
+    pub fn add_light(&self, color: &mut V3<L, N>, toward: &ShadowLanes<L, N>, seen: u32, light: Vec3) {
         if seen == 0 {
             return;
         }
@@ -276,61 +287,60 @@ impl HitLanes {
         let glossy = seen & m.glossy;
         if glossy != 0 {
             let n_dot_h = (toward.l - self.dir).normalize().dot(self.ns).to_array();
-            let mut power = [0.0; PACKET];
-            for k in bits(glossy) {
+            let mut power = [0.0; N];
+            for k in each(glossy) {
                 power[k] = n_dot_h[k].max(0.0).powf(m.shininess[k]);
             }
-            let highlight = m.specular * (m.ks * f32x8::from(power));
-            c = Vec3x8::select(lane_mask(glossy), c + highlight, c);
+            let highlight = m.specular * (m.ks * Fx::from(power));
+            c = V3::blend(glossy, c + highlight, c);
         }
-        *color = Vec3x8::select(lane_mask(seen), *color + Vec3x8::splat(light) * c, *color);
+        *color = V3::blend(seen, *color + V3::splat(light) * c, *color);
     }
 }
 
-/// Light sample `i` of eight pixel samples' lights: its positions (one splat where the sample is a
+/// Light sample `i` of `N` pixel samples' lights: its positions (one splat where the sample is a
 /// fixed light, the same for every pixel sample) and its colour.
 #[inline(always)]
-pub(super) fn light(i: usize, lights: &PerRay<Lights>) -> (Vec3x8, Vec3) {
+pub(super) fn light<L: Lanes<N>, const N: usize>(i: usize, lights: &[Lights; N]) -> (V3<L, N>, Vec3) {
     let one = lights[0].get(i);
     let at = if lights[0].shared(i) {
-        Vec3x8::splat(one.position)
+        V3::splat(one.position)
     } else {
-        // An array first: through `Vec3x8::from_fn` the light loop ran more instructions.
-        Vec3x8::from_lanes(&std::array::from_fn(|k| lights[k].get(i).position))
+        V3::from_lanes(&std::array::from_fn(|k| lights[k].get(i).position))
     };
     (at, one.color)
 }
 
-/// The materials of eight hits in lanes, gathered once (one load where every live lane hit the same
+/// The materials of `N` hits in lanes, gathered once (one load where every live lane hit the same
 /// material, the usual case).
-struct Materials {
-    kd: f32x8,
-    ks: f32x8,
-    shininess: [f32; PACKET],
-    diffuse: Vec3x8,
-    specular: Vec3x8,
+struct Materials<L, const N: usize> {
+    kd: Fx<L, N>,
+    ks: Fx<L, N>,
+    shininess: [f32; N],
+    diffuse: V3<L, N>,
+    specular: V3<L, N>,
     /// The lanes whose material has a highlight and a mirror (Ks > 0).
-    glossy: u8,
+    glossy: u32,
     /// The lanes whose material transmits (refracts).
-    transmits: u8,
+    transmits: u32,
     /// The material of every lane, where they share one.
     shared: Option<MaterialId>,
 }
 
-impl Materials {
+impl<L: Lanes<N>, const N: usize> Materials<L, N> {
     /// The materials `ids`.
     #[inline(always)]
-    fn gather(scene: &Scene, ids: &PerRay<MaterialId>) -> Self {
+    fn gather(scene: &Scene, ids: &[MaterialId; N]) -> Self {
         let one = ids[0];
-        let all = |yes: bool| if yes { !0 } else { 0 };
+        let all = |yes: bool| if yes { full::<N>() } else { 0 };
         if ids.iter().all(|&i| i == one) {
             let m = &scene.materials[one as usize];
             return Materials {
-                kd: f32x8::splat(m.kd),
-                ks: f32x8::splat(m.ks),
-                shininess: [m.shininess; PACKET],
-                diffuse: Vec3x8::splat(m.diffuse),
-                specular: Vec3x8::splat(m.specular),
+                kd: Fx::splat(m.kd),
+                ks: Fx::splat(m.ks),
+                shininess: [m.shininess; N],
+                diffuse: V3::splat(m.diffuse),
+                specular: V3::splat(m.specular),
                 glossy: all(m.ks > 0.0),
                 transmits: all(m.transmission > 0.0),
                 shared: Some(one),
@@ -340,14 +350,14 @@ impl Materials {
         let lanes = |test: fn(&Material) -> bool| {
             m.iter()
                 .enumerate()
-                .fold(0, |g, (k, m)| g | u8::from(test(m)) << k)
+                .fold(0, |g, (k, m)| g | u32::from(test(m)) << k)
         };
         Materials {
-            kd: f32x8::from(m.map(|m| m.kd)),
-            ks: f32x8::from(m.map(|m| m.ks)),
+            kd: Fx::from(m.map(|m| m.kd)),
+            ks: Fx::from(m.map(|m| m.ks)),
             shininess: m.map(|m| m.shininess),
-            diffuse: Vec3x8::from_lanes(&m.map(|m| m.diffuse)),
-            specular: Vec3x8::from_lanes(&m.map(|m| m.specular)),
+            diffuse: V3::from_lanes(&m.map(|m| m.diffuse)),
+            specular: V3::from_lanes(&m.map(|m| m.specular)),
             glossy: lanes(|m| m.ks > 0.0),
             transmits: lanes(|m| m.transmission > 0.0),
             shared: None,

@@ -65,6 +65,15 @@ impl<const MASK: bool> Lanes<8> for Avx8<MASK> {
         Avx8(avx!(_mm256_div_ps(self.0, o.0)))
     }
     #[inline(always)]
+    fn sqrt(self) -> Self {
+        Avx8(avx!(_mm256_sqrt_ps(self.0)))
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        // `maxps` gives its second operand where either is NaN: `o`'s where `self`'s is NaN.
+        Avx8(avx!(_mm256_max_ps(self.0, o.0)))
+    }
+    #[inline(always)]
     fn neg(self) -> Self {
         Avx8(avx!(_mm256_xor_ps(self.0, _mm256_set1_ps(-0.0))))
     }
@@ -112,6 +121,28 @@ impl<const MASK: bool> Lanes<8> for Avx8<MASK> {
     fn select(self, if_set: Self, if_clear: Self) -> Self {
         Avx8(avx!(_mm256_blendv_ps(if_clear.0, if_set.0, self.0)))
     }
+    #[inline(always)]
+    fn blend(mask: u32, if_set: Self, if_clear: Self) -> Self {
+        if MASK {
+            return Avx8(avx!(_mm256_mask_blend_ps(mask as u8, if_clear.0, if_set.0)));
+        }
+        // Each lane's bit of the mask, tested in the lane.
+        let bits = avx!(_mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128));
+        let lanes = avx!(_mm256_cmpeq_epi32(
+            _mm256_and_si256(_mm256_set1_epi32(mask as i32), bits),
+            bits
+        ));
+        Avx8(avx!(_mm256_blendv_ps(
+            if_clear.0,
+            if_set.0,
+            _mm256_castsi256_ps(lanes)
+        )))
+    }
+    #[inline(always)]
+    fn call<R>(f: impl FnOnce() -> R) -> R {
+        // SAFETY: values of `Avx8<MASK>` exist only on a CPU with `MASK`'s instructions (see the type).
+        unsafe { if MASK { with_avx512(f) } else { with_avx2(f) } }
+    }
     const FUSED: bool = true;
     #[inline(always)]
     fn mul_sub(self, m: Self, s: Self) -> Self {
@@ -154,6 +185,18 @@ impl<const MASK: bool> Avx8<MASK> {
             avx!(_mm256_movemask_ps(_mm256_cmp_ps::<OP>(self.0, o.0))) as u32
         }
     }
+}
+
+/// `f()` compiled for AVX2, for [`Lanes::call`] (`f` inlined into it, and its intrinsics with it).
+#[target_feature(enable = "avx2,fma,bmi1,popcnt")]
+unsafe fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
+    f()
+}
+
+/// `f()` compiled for AVX-512 F and VL, for [`Lanes::call`].
+#[target_feature(enable = "avx2,fma,bmi1,popcnt,avx512f,avx512vl")]
+unsafe fn with_avx512<R>(f: impl FnOnce() -> R) -> R {
+    f()
 }
 
 /// `k` compiled for AVX2 (the whole kernel, so that its intrinsics and `wide`'s operations inline into

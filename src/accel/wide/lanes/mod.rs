@@ -21,8 +21,10 @@ use super::ChildRef;
 use super::order::{Visit, push_ordered};
 use crate::accel::stack::Stack;
 
-/// `N` floats in SIMD lanes: what the slab test and the packet kernel's bookkeeping need.
-pub(super) trait Lanes<const N: usize>: Copy {
+/// `N` floats in SIMD lanes: what the slab test, the packet kernel's bookkeeping and the renderer's
+/// shading need. Arithmetic is IEEE's, lane by lane and never fused (but [`Lanes::mul_sub`]), so a
+/// computation gives the same bits on every lane type and in scalar code.
+pub(crate) trait Lanes<const N: usize>: Copy {
     /// `v` in every lane.
     fn splat(v: f32) -> Self;
     /// The lanes from an array.
@@ -39,6 +41,10 @@ pub(super) trait Lanes<const N: usize>: Copy {
     fn add(self, o: Self) -> Self;
     /// Lane-wise quotient.
     fn div(self, o: Self) -> Self;
+    /// Lane-wise square root.
+    fn sqrt(self) -> Self;
+    /// Lane-wise maximum; `o`'s lane where `self`'s is NaN (`f32::max` where `o` is a number).
+    fn max(self, o: Self) -> Self;
     /// Each lane with its sign bit flipped (as `wide`'s `-`).
     fn neg(self) -> Self;
     /// Each lane with its sign bit cleared (as `wide`'s `abs`).
@@ -59,6 +65,12 @@ pub(super) trait Lanes<const N: usize>: Copy {
     fn le_bits(self, o: Self) -> u32;
     /// Per lane, `if_set`'s where `self`'s lane is all ones, `if_clear`'s where it is all zeros.
     fn select(self, if_set: Self, if_clear: Self) -> Self;
+    /// Per lane, `if_set`'s where the lane's bit of `mask` is set, else `if_clear`'s.
+    fn blend(mask: u32, if_set: Self, if_clear: Self) -> Self;
+    /// `f()` compiled for this lane type's instruction set: how code over these lanes that is not
+    /// inlined into the kernel that chose them (a recursive call, a phase kept apart for the
+    /// profiles) stays on their instructions instead of calling each one out of line.
+    fn call<R>(f: impl FnOnce() -> R) -> R;
     /// Whether [`Lanes::mul_sub`] rounds once: a fused multiply-subtract in hardware (FMA).
     const FUSED: bool;
     /// `self * m - s`, rounded once where [`Lanes::FUSED`], else twice.
@@ -79,7 +91,7 @@ pub(super) trait Lanes<const N: usize>: Copy {
 
 /// Eight lanes that can be filled from two halves of four: two four-triangle leaf blocks side by side
 /// ([`super::tri4::Tri4::intersect_pair`]).
-pub(super) trait Lanes8: Lanes<8> {
+pub(crate) trait Lanes8: Lanes<8> {
     /// Whether the eight lanes are one register: where they are two SSE halves, an eight-lane step
     /// costs two four-lane ones and more to fill (`profiles/README.md`).
     const ONE_REGISTER: bool;
@@ -138,15 +150,26 @@ impl<L: Lanes8> Lanes<16> for Twice<L> {
         out[8..].copy_from_slice(&self.1.to_array());
         out
     }
-    each_half!(lanes: sub, mul, add, div, max_bits, min_bits);
+    each_half!(lanes: sub, mul, add, div, max, max_bits, min_bits);
     each_half!(mask: le, lt, ge, ne, le_bits);
-    each_half!(unary: neg, abs);
+    each_half!(unary: neg, abs, sqrt);
     #[inline(always)]
     fn select(self, if_set: Self, if_clear: Self) -> Self {
         Twice(
             self.0.select(if_set.0, if_clear.0),
             self.1.select(if_set.1, if_clear.1),
         )
+    }
+    #[inline(always)]
+    fn blend(mask: u32, if_set: Self, if_clear: Self) -> Self {
+        Twice(
+            L::blend(mask, if_set.0, if_clear.0),
+            L::blend(mask >> 8, if_set.1, if_clear.1),
+        )
+    }
+    #[inline(always)]
+    fn call<R>(f: impl FnOnce() -> R) -> R {
+        L::call(f)
     }
     const FUSED: bool = L::FUSED;
     #[inline(always)]
@@ -156,7 +179,7 @@ impl<L: Lanes8> Lanes<16> for Twice<L> {
 }
 
 /// A kernel over eight-lane vectors, for `Simd::run8` to run on the lane type it chose.
-pub(super) trait OnLanes8 {
+pub(crate) trait OnLanes8 {
     type Output;
     fn run<L: Lanes8>(self) -> Self::Output;
 }

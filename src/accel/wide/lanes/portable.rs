@@ -51,6 +51,14 @@ macro_rules! wide_lanes {
                 self / o
             }
             #[inline(always)]
+            fn sqrt(self) -> Self {
+                <$v>::sqrt(self)
+            }
+            #[inline(always)]
+            fn max(self, o: Self) -> Self {
+                <$v>::max(self, o)
+            }
+            #[inline(always)]
             fn neg(self) -> Self {
                 -self
             }
@@ -87,6 +95,15 @@ macro_rules! wide_lanes {
             fn select(self, if_set: Self, if_clear: Self) -> Self {
                 <$v>::select(self, if_set, if_clear)
             }
+            #[inline(always)]
+            fn blend(mask: u32, if_set: Self, if_clear: Self) -> Self {
+                let lanes: [u32; $n] = std::array::from_fn(|k| 0u32.wrapping_sub(mask >> k & 1));
+                <$v>::select(cast::<[u32; $n], $v>(lanes), if_set, if_clear)
+            }
+            #[inline(always)]
+            fn call<R>(f: impl FnOnce() -> R) -> R {
+                f()
+            }
             // `wide` fuses where the whole build targets FMA (`-C target-cpu=native`).
             const FUSED: bool = cfg!(target_feature = "fma");
             #[inline(always)]
@@ -99,3 +116,96 @@ macro_rules! wide_lanes {
 
 wide_lanes!(f32x4, i32x4, 4);
 wide_lanes!(f32x8, i32x8, 8);
+
+/// One lane: a plain `f32`, for code written over lanes and run on one ray (the renderer's shading).
+impl Lanes<1> for f32 {
+    #[inline(always)]
+    fn splat(v: f32) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn load(a: &[f32; 1]) -> Self {
+        a[0]
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f32; 1] {
+        [self]
+    }
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        self - o
+    }
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        self * o
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> u32 {
+        u32::from(self <= o)
+    }
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        self + o
+    }
+    #[inline(always)]
+    fn div(self, o: Self) -> Self {
+        self / o
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f32::sqrt(self)
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        f32::max(self, o)
+    }
+    #[inline(always)]
+    fn neg(self) -> Self {
+        -self
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f32::abs(self)
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> u32 {
+        u32::from(self < o)
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> u32 {
+        u32::from(self >= o)
+    }
+    #[inline(always)]
+    fn ne(self, o: Self) -> u32 {
+        u32::from(self != o)
+    }
+    #[inline(always)]
+    fn max_bits(self, o: Self) -> Self {
+        f32::from_bits((self.to_bits() as i32).max(o.to_bits() as i32) as u32)
+    }
+    #[inline(always)]
+    fn min_bits(self, o: Self) -> Self {
+        f32::from_bits((self.to_bits() as i32).min(o.to_bits() as i32) as u32)
+    }
+    #[inline(always)]
+    fn le_bits(self, o: Self) -> u32 {
+        u32::from(self.to_bits() as i32 <= o.to_bits() as i32)
+    }
+    #[inline(always)]
+    fn select(self, if_set: Self, if_clear: Self) -> Self {
+        if self.to_bits() == !0 { if_set } else { if_clear }
+    }
+    #[inline(always)]
+    fn blend(mask: u32, if_set: Self, if_clear: Self) -> Self {
+        if mask & 1 == 1 { if_set } else { if_clear }
+    }
+    #[inline(always)]
+    fn call<R>(f: impl FnOnce() -> R) -> R {
+        f()
+    }
+    const FUSED: bool = false;
+    #[inline(always)]
+    fn mul_sub(self, m: Self, s: Self) -> Self {
+        self * m - s
+    }
+}
