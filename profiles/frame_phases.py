@@ -5,7 +5,7 @@ each phase's inclusive instructions, its share of the frame and its instructions
 A phase is the inclusive cost of the functions it runs in: the accelerator's verbs are never
 inlined into the integrator (the packet verbs reach their AVX2 kernel through a `#[target_feature]`
 function, the single-ray closest-hit verbs are `#[inline(never)]`), so traversal is measured exactly, and its ray kind is
-told by the caller: the integrator's packet routine at its first level traces the camera rays, its
+told by the caller: the integrator's lanes walk (`trace_lanes`) at its first level traces the camera rays, its
 recursive levels (callgrind's `'2`) the reflected and refracted ones. Names are Rust's v0 mangling
 (frame.sh builds with it): generic functions carry their arguments, so that the shading's bodies,
 each run on its lanes through `Lanes::call` (`with_avx2::<_, ...::{closure#0}>`), are told apart.
@@ -87,6 +87,14 @@ def main():
     def inclusive(suffix):
         return sum(c for f, (c, _) in functions.items() if not recursive(f) and verb(f, suffix))
 
+    def phase(name):
+        # A body run on the packet's lanes through `Lanes::call`: `with_avx2::<_, ...name...::{closure#0}>`.
+        return sum(
+            c
+            for f, (c, _) in functions.items()
+            if not recursive(f) and "with_avx2" in f and f"::{name}" in f.split(", ", 1)[-1]
+        )
+
     def called_by(suffix, caller_test):
         return sum(
             n
@@ -96,8 +104,8 @@ def main():
             if caller_test(caller)
         )
 
-    first_level = lambda c: "shade_packet" in c and not recursive(c)  # noqa: E731
-    deeper = lambda c: "shade_packet" in c and recursive(c)  # noqa: E731
+    first_level = lambda c: "trace_lanes" in c and not recursive(c)  # noqa: E731
+    deeper = lambda c: "trace_lanes" in c and recursive(c)  # noqa: E731
     phases = [
         ("camera rays and their samples (Renderer::camera_packet)", inclusive("::camera_packet"), "primary"),
         ("sample patterns (PixelPattern::fill, spp > 1 only)", inclusive("PixelPattern::fill"), "primary"),
@@ -113,14 +121,15 @@ def main():
             "secondary",
         ),
         (
-            "hit points: position, normals (HitLanes::of_hits, Prims::surface)",
-            inclusive(">::of_hits") + inclusive("Prims::surface"),
+            "hit points: position, normals (HitLanes::of_hits)",
+            phase("of_hits"),
             "all",
         ),
         (
-            "shading in lanes: shadow rays' set-up, Blinn-Phong (local_packet)",
-            inclusive("::local_packet")
-            - called_by("Accel::occluded_packet", lambda c: "local_packet" in c),
+            "shading in lanes: shadow rays' set-up, Blinn-Phong (local_lanes)",
+            phase("local_lanes")
+            - called_by("Accel::occluded_packet", lambda c: "local_lanes" in c)
+            - called_by("Accel::occluded", lambda c: "local_lanes" in c),
             "all",
         ),
     ]

@@ -100,15 +100,17 @@ pub(crate) const fn full<const N: usize>() -> u32 {
     if N >= 32 { !0 } else { (1 << N) - 1 }
 }
 
-/// The lanes of `mask`, by index, the first lane first.
+/// The lanes of `mask` (of `N` lanes), by index, the first lane first. Each index is taken modulo
+/// `N` (a no-op on such a mask, an `and` for the powers of two `N` is), so that indexing `[T; N]`
+/// arrays with it needs no bounds check.
 #[inline(always)]
-pub(crate) fn each(mask: u32) -> impl Iterator<Item = usize> {
+pub(crate) fn each<const N: usize>(mask: u32) -> impl Iterator<Item = usize> {
     let mut mask = mask;
     std::iter::from_fn(move || {
         (mask != 0).then(|| {
             let k = mask.trailing_zeros() as usize;
             mask &= mask - 1;
-            k
+            k % N
         })
     })
 }
@@ -378,48 +380,54 @@ mod tests {
                 }
                 assert_eq!(g.load::<L>().lanes().map(bits), a.map(bits));
             }
-            // Where the length's reciprocal is zero, infinite or NaN, glam's zero; non-finite lanes.
-            let odd = [
-                Vec3::ZERO,
-                Vec3::splat(1e-30),
-                Vec3::splat(f32::INFINITY),
-                Vec3::new(f32::NAN, 0.0, 1.0),
-                Vec3::new(3e38, 3e38, 0.0),
-                Vec3::X,
-                Vec3::new(0.0, -1e-20, 0.0),
-                Vec3::new(1.0, f32::NEG_INFINITY, 0.0),
-            ];
-            let lanes = V3::<L, 8>::from_lanes(&odd);
-            for (k, (got, want)) in lanes.normalize_or_zero().lanes().iter().zip(odd).enumerate() {
-                assert_eq!(bits(*got), bits(want.normalize_or_zero()), "lane {k}");
-            }
-            assert_eq!(lanes.finite(), 0b0111_0011);
-            let picked = V3::blend(0b1010_0110, V3::<L, 8>::splat(Vec3::ONE), V3::zero()).lanes();
-            for (k, p) in picked.iter().enumerate() {
-                let want = if 0b1010_0110 >> k & 1 == 1 {
-                    Vec3::ONE
-                } else {
-                    Vec3::ZERO
-                };
-                assert_eq!(*p, want);
-            }
-            let x = [1.0, -1.0, 0.0, f32::NAN, 2.0, -0.0, 1e-30, f32::INFINITY];
-            assert_eq!(Fx::<L, 8>::from(x).positive(), 0b1101_0001);
-            let clamped = Fx::<L, 8>::from(x).clamp01().to_array();
-            let maxed = Fx::<L, 8>::from(x).max(Fx::splat(0.5)).to_array();
-            let roots = Fx::<L, 8>::from(x).sqrt().to_array();
-            for k in 0..8 {
-                assert_eq!(clamped[k].to_bits(), x[k].clamp(0.0, 1.0).to_bits(), "lane {k}");
-                let one = Fx::<f32, 1>(x[k]).clamp01().0;
-                assert_eq!(
-                    one.to_bits(),
-                    x[k].clamp(0.0, 1.0).to_bits(),
-                    "one lane: {}",
-                    x[k]
-                );
-                assert_eq!(maxed[k].to_bits(), x[k].max(0.5).to_bits(), "lane {k}");
-                assert_eq!(roots[k].to_bits(), x[k].sqrt().to_bits(), "lane {k}");
-            }
+            odd_values::<L>();
+        }
+    }
+
+    /// Where the length's reciprocal is zero, infinite or NaN, glam's zero; finiteness, blends,
+    /// clamps, maxima and roots at the edges of the floats, on eight lanes of `L` and on one.
+    fn odd_values<L: Lanes8>() {
+        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+        let odd = [
+            Vec3::ZERO,
+            Vec3::splat(1e-30),
+            Vec3::splat(f32::INFINITY),
+            Vec3::new(f32::NAN, 0.0, 1.0),
+            Vec3::new(3e38, 3e38, 0.0),
+            Vec3::X,
+            Vec3::new(0.0, -1e-20, 0.0),
+            Vec3::new(1.0, f32::NEG_INFINITY, 0.0),
+        ];
+        let lanes = V3::<L, 8>::from_lanes(&odd);
+        for (k, (got, want)) in lanes.normalize_or_zero().lanes().iter().zip(odd).enumerate() {
+            assert_eq!(bits(*got), bits(want.normalize_or_zero()), "lane {k}");
+        }
+        assert_eq!(lanes.finite(), 0b0111_0011);
+        let picked = V3::blend(0b1010_0110, V3::<L, 8>::splat(Vec3::ONE), V3::zero()).lanes();
+        for (k, p) in picked.iter().enumerate() {
+            let want = if 0b1010_0110 >> k & 1 == 1 {
+                Vec3::ONE
+            } else {
+                Vec3::ZERO
+            };
+            assert_eq!(*p, want);
+        }
+        let x = [1.0, -1.0, 0.0, f32::NAN, 2.0, -0.0, 1e-30, f32::INFINITY];
+        assert_eq!(Fx::<L, 8>::from(x).positive(), 0b1101_0001);
+        let clamped = Fx::<L, 8>::from(x).clamp01().to_array();
+        let maxed = Fx::<L, 8>::from(x).max(Fx::splat(0.5)).to_array();
+        let roots = Fx::<L, 8>::from(x).sqrt().to_array();
+        for k in 0..8 {
+            assert_eq!(clamped[k].to_bits(), x[k].clamp(0.0, 1.0).to_bits(), "lane {k}");
+            let one = Fx::<f32, 1>(x[k]).clamp01().0;
+            assert_eq!(
+                one.to_bits(),
+                x[k].clamp(0.0, 1.0).to_bits(),
+                "one lane: {}",
+                x[k]
+            );
+            assert_eq!(maxed[k].to_bits(), x[k].max(0.5).to_bits(), "lane {k}");
+            assert_eq!(roots[k].to_bits(), x[k].sqrt().to_bits(), "lane {k}");
         }
     }
 

@@ -30,6 +30,7 @@ mod options;
 pub mod progressive;
 mod renderer;
 pub mod sampler;
+mod shade;
 pub mod spd;
 pub mod tiles;
 pub mod whitted;

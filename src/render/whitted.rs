@@ -1,71 +1,28 @@
 //! The Whitted integrator (Whitted 1980): local Blinn-Phong colour from every light sample not in shadow,
 //! plus mirror reflection and Snell refraction weighted by Schlick's Fresnel term, with Beer absorption
-//! inside transparent objects. It answers "what colour does this ray see"; which rays to ask it about
-//! (pixels, samples, tiles, passes) is the kernels' and the frame's business (`super::kernel`,
-//! [`super::frame`]). Its packet twin, the same shading for eight rays at a time, is
-//! `kernel/packet.rs`.
+//! inside transparent objects. It answers "what colour do these rays see", for one ray or a packet of
+//! eight with the same code: the walk of each sample's ray tree here, the shading of its hits in lanes
+//! (`super::shade`); which rays to ask it about (pixels, samples, tiles, passes) is the kernels' and
+//! the frame's business (`super::kernel`, [`super::frame`]).
 //!
-//! Conventions (those of NFF/p3f renderers; the README lists them): surfaces are two-sided, so normals
-//! are turned toward the incoming ray; no ambient term; lights have no falloff; secondary and shadow rays
-//! start [`EPSILON`] along the geometric normal on the side they leave from. In Whitted's model a
-//! transparent object casts a full shadow: shadow rays do not pass through glass.
+//! In Whitted's model a transparent object casts a full shadow: shadow rays do not pass through glass.
 
 use glam::{Vec2, Vec3};
 
 use super::env::Background;
+use super::lanes::{Lanes, V3, each};
 use super::light::{self, LightSample, Lights};
-use super::optics::{beer, reflect, refract, schlick};
+use super::optics::beer;
 use super::options::MAX_DEPTH;
 use super::sampler::Sampler;
+use super::shade::{HitLanes, light};
 use crate::accel::counters::{self, Steps};
-use crate::accel::{Accel, Counting, Hit, Plain, Prims, Surface, Tally, Verbs};
+use crate::accel::lanes::Lanes8;
+use crate::accel::{Accel, Counting, Hit, PACKET, Plain, Prims, Tally, Verbs};
 use crate::geometry::ray::Ray;
-use crate::scene::{Material, MaterialId, QuadLight, Scene};
+use crate::scene::{QuadLight, Scene};
 
-/// Offset of secondary and shadow ray origins along the geometric normal, in scene units.
-pub const EPSILON: f32 = 1e-4;
-
-/// A shadow ray toward one light sample.
-#[derive(Clone, Copy, Debug)]
-pub struct ShadowRay {
-    /// From just off the surface toward the light (unit direction).
-    pub ray: Ray,
-    /// Distance to the light: anything hit before it casts the shadow.
-    pub distance: f32,
-    /// Cosine between the shading normal and the direction to the light.
-    pub n_dot_l: f32,
-}
-
-impl ShadowRay {
-    /// The shadow ray from `p` (geometric normal `ng`, shading normal `ns`) to `light`, or `None` when
-    /// the light is behind the shading normal (it then adds nothing, neither diffuse nor highlight). The
-    /// single-ray path builds its shadow rays here, the packet kernel the same rays in
-    /// lanes (`kernel/shade.rs`).
-    #[inline]
-    pub fn new(p: Vec3, ng: Vec3, ns: Vec3, light: &LightSample) -> Option<Self> {
-        let l = (light.position - p).normalize();
-        let n_dot_l = ns.dot(l);
-        if n_dot_l.is_nan() || n_dot_l <= 0.0 {
-            return None;
-        }
-        let origin = p + ng * if ng.dot(l) >= 0.0 { EPSILON } else { -EPSILON };
-        Some(ShadowRay {
-            ray: Ray::new(origin, l),
-            distance: (light.position - origin).length(),
-            n_dot_l,
-        })
-    }
-}
-
-/// The rays a hit spawns: the refracted ray (with Fresnel's transmitted share) and the mirror ray
-/// (with Ks times Fresnel's reflected share), each when its weight is not zero.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Bounces {
-    /// Refracted ray and weight.
-    pub refracted: Option<(Ray, f32)>,
-    /// Reflected ray and weight.
-    pub reflected: Option<(Ray, f32)>,
-}
+pub use super::shade::EPSILON;
 
 /// Rays traced, by kind.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -100,8 +57,8 @@ pub enum RayKind {
 }
 
 impl RayKind {
-    /// The kind of a hit's secondary ray `i`: 0 refracted, 1 reflected (the order of
-    /// [`Whitted::shade_surface`]'s rays).
+    /// The kind of a hit's secondary ray `i`: 0 refracted, 1 reflected (the order in which a hit's
+    /// rays are traced).
     pub fn secondary(i: usize) -> RayKind {
         if i == 0 {
             RayKind::Refracted
@@ -194,12 +151,6 @@ impl SampleRays {
     pub fn budget_spent(&self) -> bool {
         self.reflected + self.refracted >= SPLIT_BUDGET
     }
-
-    /// Counts the secondary rays of `bounces`.
-    pub fn add_bounces(&mut self, bounces: &Bounces) {
-        self.refracted += bounces.refracted.is_some() as u64;
-        self.reflected += bounces.reflected.is_some() as u64;
-    }
 }
 
 impl std::ops::AddAssign<SampleRays> for RayCounts {
@@ -276,16 +227,20 @@ const FUZZ_TRIES: u32 = 16;
 /// [`super::options::MAX_DEPTH`] bounces would trace 2⁶⁵ rays; with it a sample's tree holds at most
 /// this many splits and each of its at most this many open branches then goes on as one chain of at
 /// most `MAX_DEPTH` rays. Trees of up to 9 bounces (1,022 secondary rays) never reach it, so images
-/// at the usual depths are untouched (the default of 6 spawns at most 126). Both kernels count a
-/// sample's rays in the same order, so they cut the same branches.
+/// at the usual depths are untouched (the default of 6 spawns at most 126). A sample's rays are counted
+/// in the same depth-first order whatever its lane count, so every kernel cuts the same branches.
 const SPLIT_BUDGET: u64 = 1024;
+
+/// Spawned rays with fewer live lanes than this go ray by ray: a packet's node tests cost about as
+/// much for one ray as for eight.
+const MIN_LANES: u32 = 2;
 
 /// The integrator of one frame: the scene, the structure that answers its rays, what a ray that leaves
 /// the scene sees, the light samples and each material's roughness; shared read-only by the workers.
 pub struct Whitted<'a> {
     scene: &'a Scene,
-    pub(super) prims: Prims<'a>,
-    pub(super) accel: &'a Accel<'a>,
+    prims: Prims<'a>,
+    accel: &'a Accel<'a>,
     background: Background,
     /// Point lights, and without sampling the quad lights' regular grids.
     fixed_lights: Vec<LightSample>,
@@ -365,211 +320,6 @@ impl<'a> Whitted<'a> {
         self.count
     }
 
-    /// The colour seen along `ray` (unit direction), a ray of `kind`, after `depth` bounces.
-    pub fn trace(&self, ray: &Ray, depth: u32, kind: RayKind, sample: &mut PixelSample) -> Vec3 {
-        let mut hit = Hit::miss(f32::INFINITY);
-        if self.count {
-            out_of_line(|| self.closest_tallied::<Counting>(ray, kind, sample, &mut hit));
-        } else {
-            self.closest_tallied::<Plain>(ray, kind, sample, &mut hit);
-        }
-        self.shade(ray, &hit, depth, sample)
-    }
-
-    /// [`Whitted::trace`]'s closest hit through the verbs of `T`, its steps charged to the sample's
-    /// slot when `T` counts.
-    #[inline(always)]
-    fn closest_tallied<T: Tally>(&self, ray: &Ray, kind: RayKind, sample: &PixelSample, hit: &mut Hit) {
-        closest(self.accel.verbs::<T>(), ray, kind, hit);
-        if T::COUNTS {
-            charge(sample.slot, kind, counters::lane(0));
-        }
-    }
-
-    /// Whether `shadow` is blocked, its steps added to `steps` when counting.
-    pub(super) fn blocked(&self, shadow: &ShadowRay, steps: &mut Steps) -> bool {
-        if self.count {
-            out_of_line(|| self.blocked_tallied::<Counting>(shadow, steps))
-        } else {
-            self.blocked_tallied::<Plain>(shadow, steps)
-        }
-    }
-
-    /// [`Whitted::blocked`] through the verbs of `T`.
-    #[inline(always)]
-    fn blocked_tallied<T: Tally>(&self, shadow: &ShadowRay, steps: &mut Steps) -> bool {
-        let blocked = self
-            .accel
-            .verbs::<T>()
-            .occluded(&shadow.ray, 0.0, shadow.distance);
-        if T::COUNTS {
-            *steps += counters::lane(0);
-        }
-        blocked
-    }
-
-    /// The colour of `ray` given its closest hit: the background for a miss, else
-    /// [`shade_surface`](Self::shade_surface) with shadow and secondary rays traced one by one.
-    pub fn shade(&self, ray: &Ray, hit: &Hit, depth: u32, sample: &mut PixelSample) -> Vec3 {
-        if !hit.is_hit() {
-            return self.background.sample(ray.dir);
-        }
-        sample.rays.primary_hits += u64::from(depth == 0);
-        let surface = self.prims.surface(ray, hit);
-        let bounces = self.bounces(ray, &surface, depth, sample);
-        sample.rays.add_bounces(&bounces);
-        let lights = sample.lights;
-        let (mut shadows, mut steps) = (0, Steps::default());
-        let color = self.shade_surface(
-            ray,
-            &surface,
-            &bounces,
-            &lights,
-            &mut |_, shadow| {
-                shadows += 1;
-                self.blocked(shadow, &mut steps)
-            },
-            &mut |i, r| self.trace(r, depth + 1, RayKind::secondary(i), sample),
-        );
-        sample.rays.shadow += shadows;
-        if self.count {
-            charge(sample.slot, RayKind::Shadow, steps);
-        }
-        color
-    }
-
-    /// The refracted and reflected rays of `ray`'s hit at `surface`; none at the depth limit, and only
-    /// the heavier one once `sample` has spent its `SPLIT_BUDGET`. A rough material's mirror
-    /// direction is perturbed within a ball of its roughness, drawn from the sample's generator.
-    pub fn bounces(&self, ray: &Ray, surface: &Surface, depth: u32, sample: &mut PixelSample) -> Bounces {
-        let mut out = self.split(ray, surface, depth, &mut sample.rng);
-        if let (Some((_, t)), Some((_, r))) = (out.refracted, out.reflected)
-            && sample.rays.budget_spent()
-        {
-            // On a tie the mirror ray goes on: it is the one a total internal reflection keeps.
-            if t > r {
-                out.reflected = None;
-            } else {
-                out.refracted = None;
-            }
-        }
-        out
-    }
-
-    /// Both rays a hit spawns, before the split budget.
-    fn split(&self, ray: &Ray, surface: &Surface, depth: u32, rng: &mut Sampler) -> Bounces {
-        let mut out = Bounces::default();
-        if depth >= self.max_depth {
-            return out;
-        }
-        let m = &self.scene.materials[surface.material as usize];
-        let (p, ng, ns) = (surface.point, surface.geometric, surface.shading);
-        // Fresnel splits light between the mirror and the refracted ray; opaque surfaces reflect Ks.
-        let (mut kr, mut total_internal) = (1.0, false);
-        if m.transmission > 0.0 {
-            let (eta_i, eta_t) = if surface.inside {
-                (m.ior, 1.0)
-            } else {
-                (1.0, m.ior)
-            };
-            let cos_i = (-ray.dir.dot(ns)).clamp(0.0, 1.0);
-            kr = schlick(cos_i, eta_i, eta_t);
-            if let Some(t) = refract(ray.dir, ns, eta_i / eta_t) {
-                let weight = m.transmission * (1.0 - kr);
-                // The SPD's rule 9 counts the refracted ray even where Schlick leaves it nothing (grazing).
-                if weight > 0.0 || self.spd {
-                    out.refracted = Some((Ray::new(p - EPSILON * ng, t.normalize()), weight));
-                }
-            } else {
-                kr = 1.0;
-                total_internal = true;
-            }
-        }
-        let weight = if total_internal && self.spd {
-            // The SPD rule: the light that found no way out is all reflected, whatever Ks says.
-            m.ks + m.transmission
-        } else {
-            m.ks * kr
-        };
-        // The SPD's rules 8 and 9 count a transmitter's mirror ray whatever its Ks (its transmitters
-        // are meant to be reflective too): at Ks 0 it is traced with weight 0 and adds nothing.
-        if weight > 0.0 || (self.spd && m.transmission > 0.0) {
-            let mirror = reflect(ray.dir, ns).normalize();
-            let roughness = self.roughness[surface.material as usize];
-            let dir = if roughness > 0.0 {
-                fuzz(mirror, ng, roughness, rng)
-            } else {
-                mirror
-            };
-            out.reflected = Some((Ray::new(p + EPSILON * ng, dir), weight));
-        }
-        out
-    }
-
-    /// Local colour plus the light of `bounces` at `surface`, hit by `ray`. `occluded(i, shadow)` says
-    /// whether the shadow ray toward light sample `i` is blocked and `trace(i, ray)` what secondary ray
-    /// `i` (0 refracted, 1 reflected) sees: traced there and then, or looked up from packets traced beforehand.
-    pub fn shade_surface(
-        &self,
-        ray: &Ray,
-        surface: &Surface,
-        bounces: &Bounces,
-        lights: &Lights,
-        occluded: &mut impl FnMut(usize, &ShadowRay) -> bool,
-        trace: &mut impl FnMut(usize, &Ray) -> Vec3,
-    ) -> Vec3 {
-        let m = &self.scene.materials[surface.material as usize];
-        let local = self.local(surface, -ray.dir, m, lights, occluded);
-        self.add_bounces(local, surface, bounces, trace)
-    }
-
-    /// The colour at `surface` from its `local` colour (the light samples') and what its `bounces`
-    /// see (`trace`, as in [`shade_surface`](Self::shade_surface)), absorbed by Beer's law where
-    /// the ray crossed a transmitter's interior.
-    pub(super) fn add_bounces(
-        &self,
-        local: Vec3,
-        surface: &Surface,
-        bounces: &Bounces,
-        trace: &mut impl FnMut(usize, &Ray) -> Vec3,
-    ) -> Vec3 {
-        let mut color = local;
-        for (i, bounce) in [bounces.refracted, bounces.reflected].iter().enumerate() {
-            if let Some((r, weight)) = bounce {
-                color += *weight * trace(i, r);
-            }
-        }
-        self.absorbed(color, surface)
-    }
-
-    /// `color` seen at `surface`, absorbed by Beer's law where the ray crossed a transmitter's
-    /// interior from its entry point to here.
-    #[inline]
-    pub(super) fn absorbed(&self, color: Vec3, surface: &Surface) -> Vec3 {
-        let m = &self.scene.materials[surface.material as usize];
-        if surface.inside && m.transmission > 0.0 {
-            color * beer(m.diffuse, surface.t)
-        } else {
-            color
-        }
-    }
-
-    /// Whether `material`'s mirror rays are fuzzy ([`fuzz`]: drawn from the sample's generator).
-    #[inline]
-    pub(super) fn rough(&self, material: MaterialId) -> bool {
-        self.roughness[material as usize] > 0.0
-    }
-
-    /// Most bounces after the primary hit.
-    pub(super) fn max_depth(&self) -> u32 {
-        self.max_depth
-    }
-
-    /// Whether the SPD's rules apply ([`super::spd`]).
-    pub(super) fn spd(&self) -> bool {
-        self.spd
-    }
-
     /// Whether some material has a roughness: where it reflects, its mirror rays draw from the pixel
     /// sample's generator ([`fuzz`]).
     pub(super) fn has_rough_mirrors(&self) -> bool {
@@ -581,45 +331,319 @@ impl<'a> Whitted<'a> {
         !self.quads.is_empty()
     }
 
-    /// Blinn-Phong local colour: Σ C_light (Kd·Cd·max(0, n·L) + Ks·Cs·max(0, n·h)^shine), h = |L + V|,
-    /// over the light samples whose shadow ray is not blocked.
-    fn local(
+    /// The colour seen along `ray` (unit direction), a ray of `kind`, after `depth` bounces: the
+    /// one-lane instance of the integrator's walk over lanes (`Whitted::trace_lanes`), which the packet
+    /// kernel runs on eight.
+    pub fn trace(&self, ray: &Ray, depth: u32, kind: RayKind, sample: &mut PixelSample) -> Vec3 {
+        let seen = self.trace_lanes::<f32, 1>(
+            std::array::from_ref(ray),
+            1,
+            depth,
+            kind,
+            std::array::from_mut(sample),
+        );
+        seen.lanes()[0]
+    }
+
+    /// The colours seen along the rays of `rays` in `active` (unit directions; the other lanes are
+    /// zero), rays of `kind` after `depth` bounces, each lane the ray of its own pixel sample: their
+    /// closest hits, then for each hit the local colour (a shadow ray toward each light sample, the
+    /// lanes' rays toward one sample traced together) and what its refracted and reflected rays see
+    /// (each kind traced together, recursively to the depth limit), absorbed by Beer's law where the
+    /// ray crossed a transmitter. Each lane draws its random numbers and counts its rays in its own
+    /// sample's depth-first order, so a sample gets the same colour whatever lanes it shares.
+    // Not inlined (it recurses): its body on the lanes' instructions (`Lanes::call`).
+    #[inline(never)]
+    pub(super) fn trace_lanes<L: Width<N>, const N: usize>(
         &self,
-        surface: &Surface,
-        v: Vec3,
-        m: &Material,
-        lights: &Lights,
-        occluded: &mut impl FnMut(usize, &ShadowRay) -> bool,
-    ) -> Vec3 {
-        let (p, ng, ns) = (surface.point, surface.geometric, surface.shading);
-        let mut color = Vec3::ZERO;
-        for (i, light) in lights.iter().enumerate() {
-            let Some(shadow) = ShadowRay::new(p, ng, ns, &light) else {
-                continue;
-            };
-            if occluded(i, &shadow) {
-                continue;
-            }
-            let l = shadow.ray.dir;
-            let mut c = m.kd * shadow.n_dot_l * m.diffuse;
-            if m.ks > 0.0 {
-                let h = (l + v).normalize();
-                c += m.ks * h.dot(ns).max(0.0).powf(m.shininess) * m.specular;
-            }
-            color += light.color * c;
+        rays: &[Ray; N],
+        active: u32,
+        depth: u32,
+        kind: RayKind,
+        samples: &mut [PixelSample; N],
+    ) -> V3<L, N> {
+        L::call(
+            #[inline(always)]
+            || {
+                let mut hits = [Hit::miss(f32::INFINITY); N];
+                let hit = if self.count {
+                    out_of_line(|| {
+                        closest_tallied::<Counting, L, N>(self, rays, active, kind, samples, &mut hits)
+                    })
+                } else {
+                    closest_tallied::<Plain, L, N>(self, rays, active, kind, samples, &mut hits)
+                };
+                if depth == 0 {
+                    for k in each::<N>(hit) {
+                        samples[k].rays.primary_hits += 1;
+                    }
+                }
+                let mut missed = [Vec3::ZERO; N];
+                for k in each::<N>(active & !hit) {
+                    // What a ray that leaves the scene sees.
+                    missed[k] = self.background.sample(rays[k].dir);
+                }
+                let missed = V3::from_lanes(&missed);
+                let Some(h) = HitLanes::<L, N>::of_hits(&self.prims, rays, &hits, hit) else {
+                    return missed;
+                };
+                let mut color = self.local_lanes(&h, samples);
+                if depth < self.max_depth {
+                    let spawned = self.spawn(&h, samples);
+                    // What the refracted (0) and reflected (1) rays see, each kind traced together (the
+                    // lanes of `spawned.lanes`; the others keep whatever ray they held, never traced),
+                    // added in that order.
+                    let mut next = [Ray::new(Vec3::ZERO, Vec3::Z); N];
+                    for (i, s) in spawned.iter().enumerate() {
+                        if s.lanes == 0 {
+                            continue;
+                        }
+                        let (origin, dir) = (s.origin.lanes(), s.dir.lanes());
+                        for k in each::<N>(s.lanes) {
+                            next[k] = Ray::new(origin[k], dir[k]);
+                        }
+                        let seen =
+                            self.trace_spawned(&next, s.lanes, depth + 1, RayKind::secondary(i), samples);
+                        color = V3::blend(s.lanes, color + seen * s.weight, color);
+                    }
+                }
+                V3::blend(hit, self.absorbed(&h, color), missed)
+            },
+        )
+    }
+
+    /// [`trace_lanes`](Self::trace_lanes), or ray by ray when too few lanes are live to share nodes
+    /// or their directions point into different octants (rays off a curved mirror, say), which share
+    /// few nodes (faster: `profiles/README.md`, tuned constants).
+    #[inline(always)]
+    fn trace_spawned<L: Width<N>, const N: usize>(
+        &self,
+        rays: &[Ray; N],
+        mask: u32,
+        depth: u32,
+        kind: RayKind,
+        samples: &mut [PixelSample; N],
+    ) -> V3<L, N> {
+        if N == 1 || coherent(each::<N>(mask).map(|k| &rays[k])) {
+            return self.trace_lanes(rays, mask, depth, kind, samples);
         }
-        color
+        let mut out = [Vec3::ZERO; N];
+        for k in each::<N>(mask) {
+            out[k] = self.trace(&rays[k], depth, kind, &mut samples[k]);
+        }
+        V3::from_lanes(&out)
+    }
+
+    /// The local colour of the hits `h`: light sample by light sample, their shadow rays set up in
+    /// lanes and traced together (lane `k` aims at its own pixel sample's light), and the Blinn-Phong
+    /// sum in lanes.
+    // Its body on the lanes' instructions (`Lanes::call`: for eight lanes a function of its own, a
+    // phase of `profiles/frame.sh`).
+    #[inline(always)]
+    fn local_lanes<L: Width<N>, const N: usize>(
+        &self,
+        h: &HitLanes<L, N>,
+        samples: &mut [PixelSample; N],
+    ) -> V3<L, N> {
+        L::call(
+            #[inline(always)]
+            || {
+                let lights = samples.each_ref().map(|s| s.lights);
+                let mut color = V3::zero();
+                for i in 0..lights[0].len() {
+                    let (at, light) = light(i, &lights);
+                    let toward = h.toward(at);
+                    let lit = toward.lit;
+                    if lit == 0 {
+                        continue;
+                    }
+                    for k in each::<N>(lit) {
+                        samples[k].rays.shadow += 1;
+                    }
+                    let (shadows, distance) = h.shadow_rays(&toward);
+                    let blocked = if self.count {
+                        out_of_line(|| {
+                            blocked_tallied::<Counting, L, N>(self, &shadows, lit, &distance, samples)
+                        })
+                    } else {
+                        blocked_tallied::<Plain, L, N>(self, &shadows, lit, &distance, samples)
+                    };
+                    h.add_light(&mut color, &toward, lit & !blocked, light);
+                }
+                color
+            },
+        )
+    }
+
+    /// The refracted (0) and reflected (1) rays of the hits `h`, counted into their samples: a rough
+    /// material's mirror direction drawn from its sample's generator ([`fuzz`]), and only the heavier
+    /// of the two where a sample has spent its [`SPLIT_BUDGET`] (on a tie the mirror ray, the one a
+    /// total internal reflection keeps).
+    #[inline(always)]
+    fn spawn<L: Lanes<N>, const N: usize>(
+        &self,
+        h: &HitLanes<L, N>,
+        samples: &mut [PixelSample; N],
+    ) -> [super::shade::Spawned<L, N>; 2] {
+        let rough = h.materials_where(|m| self.roughness[m as usize] > 0.0);
+        let [mut refracted, mut reflected] =
+            h.bounces(self.scene, h.live(), self.spd, rough, |k, mirror, ng| {
+                let roughness = self.roughness[h.surface(k).material as usize];
+                fuzz(mirror, ng, roughness, &mut samples[k].rng)
+            });
+        let both = refracted.lanes & reflected.lanes;
+        let spent = each::<N>(both).fold(0, |m, k| m | u32::from(samples[k].rays.budget_spent()) << k);
+        if spent != 0 {
+            let heavier = spent & refracted.weight.gt(reflected.weight);
+            reflected.lanes &= !heavier;
+            refracted.lanes &= !(spent & !heavier);
+        }
+        for k in each::<N>(h.live()) {
+            let r = &mut samples[k].rays;
+            r.refracted += u64::from(refracted.lanes >> k & 1);
+            r.reflected += u64::from(reflected.lanes >> k & 1);
+        }
+        [refracted, reflected]
+    }
+
+    /// `color` seen at the hits `h`, absorbed by Beer's law where the ray crossed a transmitter's
+    /// interior from its entry point to here.
+    #[inline(always)]
+    fn absorbed<L: Lanes<N>, const N: usize>(&self, h: &HitLanes<L, N>, color: V3<L, N>) -> V3<L, N> {
+        let inside = h.inside_transmitters();
+        if inside == 0 {
+            return color;
+        }
+        let mut lanes = color.lanes();
+        for k in each::<N>(inside) {
+            let s = h.surface(k);
+            lanes[k] *= beer(self.scene.materials[s.material as usize].diffuse, s.t);
+        }
+        V3::from_lanes(&lanes)
     }
 }
 
-/// The closest hit of `ray`, a ray of `kind`, through `verbs`: camera rays by the coherent verb.
-#[inline(always)]
-fn closest<T: Tally>(verbs: Verbs<'_, '_, T>, ray: &Ray, kind: RayKind, hit: &mut Hit) {
-    if kind == RayKind::Camera {
-        verbs.intersect_coherent(ray, 0.0, hit);
-    } else {
-        verbs.intersect(ray, 0.0, hit);
+/// The lanes the integrator traces on: one ray ([`f32`]) or a packet of eight, and the verbs that
+/// trace them.
+pub(super) trait Width<const N: usize>: Lanes<N> {
+    /// The closest hits of the rays of `rays` in `active`, rays of `kind`, through `verbs`: the lanes
+    /// that hit.
+    fn closest<T: Tally>(
+        verbs: Verbs<'_, '_, T>,
+        rays: &[Ray; N],
+        active: u32,
+        kind: RayKind,
+        hits: &mut [Hit; N],
+    ) -> u32;
+    /// Which of the rays of `rays` in `active` are blocked before `t_max`.
+    fn blocked<T: Tally>(verbs: Verbs<'_, '_, T>, rays: &[Ray; N], active: u32, t_max: &[f32; N]) -> u32;
+}
+
+/// One ray: camera rays by the coherent verb.
+impl Width<1> for f32 {
+    #[inline(always)]
+    fn closest<T: Tally>(
+        verbs: Verbs<'_, '_, T>,
+        rays: &[Ray; 1],
+        active: u32,
+        kind: RayKind,
+        hits: &mut [Hit; 1],
+    ) -> u32 {
+        if active == 0 {
+            return 0;
+        }
+        let hit = if kind == RayKind::Camera {
+            verbs.intersect_coherent(&rays[0], 0.0, &mut hits[0])
+        } else {
+            verbs.intersect(&rays[0], 0.0, &mut hits[0])
+        };
+        u32::from(hit)
     }
+
+    #[inline(always)]
+    fn blocked<T: Tally>(verbs: Verbs<'_, '_, T>, rays: &[Ray; 1], active: u32, t_max: &[f32; 1]) -> u32 {
+        u32::from(active != 0 && verbs.occluded(&rays[0], 0.0, t_max[0]))
+    }
+}
+
+/// A packet of eight rays.
+impl<L: Lanes8> Width<PACKET> for L {
+    #[inline(always)]
+    fn closest<T: Tally>(
+        verbs: Verbs<'_, '_, T>,
+        rays: &[Ray; PACKET],
+        active: u32,
+        _: RayKind,
+        hits: &mut [Hit; PACKET],
+    ) -> u32 {
+        u32::from(verbs.intersect_packet(rays, active as u8, 0.0, hits))
+    }
+
+    #[inline(always)]
+    fn blocked<T: Tally>(
+        verbs: Verbs<'_, '_, T>,
+        rays: &[Ray; PACKET],
+        active: u32,
+        t_max: &[f32; PACKET],
+    ) -> u32 {
+        u32::from(verbs.occluded_packet(rays, active as u8, 0.0, t_max))
+    }
+}
+
+/// [`Whitted::trace_lanes`]' closest hits through the verbs of `T`, counted into each lane's sample
+/// as rays of `kind` when `T` counts.
+#[inline(always)]
+fn closest_tallied<T: Tally, L: Width<N>, const N: usize>(
+    whitted: &Whitted,
+    rays: &[Ray; N],
+    active: u32,
+    kind: RayKind,
+    samples: &[PixelSample; N],
+    hits: &mut [Hit; N],
+) -> u32 {
+    let hit = L::closest(whitted.accel.verbs::<T>(), rays, active, kind, hits);
+    if T::COUNTS {
+        for k in each::<N>(active) {
+            charge(samples[k].slot, kind, counters::lane(k));
+        }
+    }
+    hit
+}
+
+/// Which of the shadow rays `rays` in `active` are blocked, through the verbs of `T`, counted into
+/// each lane's sample when `T` counts.
+#[inline(always)]
+fn blocked_tallied<T: Tally, L: Width<N>, const N: usize>(
+    whitted: &Whitted,
+    rays: &[Ray; N],
+    active: u32,
+    t_max: &[f32; N],
+    samples: &[PixelSample; N],
+) -> u32 {
+    let blocked = L::blocked(whitted.accel.verbs::<T>(), rays, active, t_max);
+    if T::COUNTS {
+        for k in each::<N>(active) {
+            charge(samples[k].slot, RayKind::Shadow, counters::lane(k));
+        }
+    }
+    blocked
+}
+
+/// Whether `rays` (up to a packet's worth) are worth tracing together: at least [`MIN_LANES`] of
+/// them, their directions all in one octant.
+fn coherent<'r>(mut rays: impl Iterator<Item = &'r Ray>) -> bool {
+    let octant = |r: &Ray| r.dir.cmplt(Vec3::ZERO).bitmask();
+    let Some(first) = rays.next().map(octant) else {
+        return false;
+    };
+    let mut n = 1;
+    for r in rays {
+        if octant(r) != first {
+            return false;
+        }
+        n += 1;
+    }
+    n >= MIN_LANES
 }
 
 /// A fuzzy reflection (the course's glossy mirror; Shirley's "fuzz"): the mirror direction plus a

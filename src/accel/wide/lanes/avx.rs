@@ -187,13 +187,16 @@ impl<const MASK: bool> Avx8<MASK> {
     }
 }
 
-/// `f()` compiled for AVX2, for [`Lanes::call`] (`f` inlined into it, and its intrinsics with it).
+/// `f()` compiled for AVX2, for [`Lanes::call`] (`f` inlined into it, and its intrinsics with it). A
+/// function of its own, never inlined, so that the profiles see each body by its closure's name.
+#[inline(never)]
 #[target_feature(enable = "avx2,fma,bmi1,popcnt")]
 unsafe fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
     f()
 }
 
-/// `f()` compiled for AVX-512 F and VL, for [`Lanes::call`].
+/// `f()` compiled for AVX-512 F and VL, for [`Lanes::call`], never inlined.
+#[inline(never)]
 #[target_feature(enable = "avx2,fma,bmi1,popcnt,avx512f,avx512vl")]
 unsafe fn with_avx512<R>(f: impl FnOnce() -> R) -> R {
     f()

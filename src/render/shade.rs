@@ -1,23 +1,25 @@
-//! Eight hits shaded at once, for the kernels that hold them together (packets, and the stream
-//! kernel's generations): the packet's hit points and normals computed in lanes, each light sample's
-//! eight shadow rays set up in lanes, the Blinn-Phong sum in lanes, and the packet's refracted and
-//! reflected rays set up in lanes. The operations are the single-ray path's in its order
-//! ([`Prims::surface`], [`ShadowRay::new`], [`Whitted::shade_surface`], [`Whitted::bounces`]), lane
-//! by lane, so the bits are its bits; only `powf` goes lane by lane, as the scalar function.
+//! Whitted's shading of `N` hits at once, written once over lanes (one lane for a single ray, eight
+//! for a packet): the hits' points and normals, each light sample's shadow rays set up, the
+//! Blinn-Phong sum over the samples not in shadow, and the refracted and reflected rays (Snell,
+//! Schlick's Fresnel split, the mirror) with their weights. Every operation is the same IEEE
+//! arithmetic on every lane type, so a hit's colour has the same bits whatever its lane count; only
+//! `powf` goes lane by lane.
 //!
-//! [`ShadowRay::new`]: crate::render::whitted::ShadowRay::new
-//! [`Whitted::shade_surface`]: crate::render::whitted::Whitted::shade_surface
-//! [`Whitted::bounces`]: crate::render::whitted::Whitted::bounces
+//! Conventions (those of NFF/p3f renderers; the README lists them): surfaces are two-sided, so normals
+//! are turned toward the incoming ray; no ambient term; lights have no falloff; secondary and shadow rays
+//! start [`EPSILON`] along the geometric normal on the side they leave from.
 
 use glam::Vec3;
 
+use super::lanes::{Fx, Gather, Lanes, V3, each, full};
+use super::light::Lights;
+use super::optics::{reflect_lanes, refract_lanes, schlick_lanes};
 use crate::accel::{Hit, PrimKind, Prims, Surface};
 use crate::geometry::ray::Ray;
-use crate::render::lanes::{Fx, Gather, Lanes, V3, each, full};
-use crate::render::light::Lights;
-use crate::render::optics::{reflect_lanes, refract_lanes, schlick_lanes};
-use crate::render::whitted::EPSILON;
 use crate::scene::{Material, MaterialId, NO_NORMALS, Scene};
+
+/// Offset of secondary and shadow ray origins along the geometric normal, in scene units.
+pub const EPSILON: f32 = 1e-4;
 
 /// Up to `N` hits in lanes: where they lie, their normals, the rays' directions and their
 /// materials.
@@ -44,7 +46,7 @@ pub(super) struct ShadowLanes<L, const N: usize> {
     l: V3<L, N>,
     n_dot_l: Fx<L, N>,
     /// The live lanes whose light lies in front of the shading normal: those whose shadow rays are
-    /// traced (the others add nothing, as `ShadowRay::new` returns none for them).
+    /// traced (the others add nothing, neither diffuse nor highlight).
     pub lit: u32,
 }
 
@@ -72,16 +74,16 @@ impl<L: Lanes<N>, const N: usize> Spawned<L, N> {
 
 impl<L: Lanes<N>, const N: usize> HitLanes<L, N> {
     /// The surfaces at the closest hits `hits` of `rays` in the lanes of `live`, computed in lanes
-    /// ([`Prims::surface`]'s operations in its order): a triangle's normals from its edges and vertex
-    /// normals gathered lane by lane, other kinds' normals lane by lane. `None` if no lane is live.
-    // Not inlined: a phase of `profiles/frame.sh`, called once a packet (its body on the frame's
-    // lanes, `Lanes::call`).
-    #[inline(never)]
+    /// ([`Prims::surface`]'s normals): a triangle's normals from its edges and vertex normals
+    /// gathered lane by lane, other kinds' normals lane by lane. `None` if no lane is live.
+    // Its body on the lanes' instructions (`Lanes::call`: for eight lanes a function of its own, a
+    // phase of `profiles/frame.sh`).
+    #[inline(always)]
     pub fn of_hits(prims: &Prims, rays: &[Ray; N], hits: &[Hit; N], live: u32) -> Option<Self> {
         L::call(
             #[inline(always)]
             || {
-                let first = each(live).next()?;
+                let first = each::<N>(live).next()?;
                 let tris = &prims.scene.triangles;
                 // Every array cut to one length: one bounds check a lane.
                 let n = tris.material.len();
@@ -96,7 +98,7 @@ impl<L: Lanes<N>, const N: usize> HitLanes<L, N> {
                 let mut ids = [MaterialId::MAX; N];
                 // Lanes on triangles with vertex normals, and lanes on other kinds of primitive.
                 let (mut smooth, mut other) = (0u32, 0u32);
-                for k in each(live) {
+                for k in each::<N>(live) {
                     let hit = &hits[k];
                     if let PrimKind::Triangle(i) = prims.kind(hit.prim) {
                         e1.set(k, edge1.get(i));
@@ -157,28 +159,28 @@ impl<L: Lanes<N>, const N: usize> HitLanes<L, N> {
         )
     }
 
-    /// The lanes whose ray hit the back of its surface.
-    #[inline]
-    pub fn inside(&self) -> u32 {
-        self.inside
+    /// The lanes that hold a hit.
+    #[inline(always)]
+    pub fn live(&self) -> u32 {
+        self.live
     }
 
-    /// The lanes whose material transmits.
-    #[inline]
-    pub fn transmits(&self) -> u32 {
-        self.m.transmits
+    /// The lanes whose ray hit the back of a transmitter: the light they carry crossed its inside.
+    #[inline(always)]
+    pub fn inside_transmitters(&self) -> u32 {
+        self.inside & self.m.transmits
     }
 
     /// The live lanes whose material passes `test`: one test where the lanes share a material.
-    #[inline]
+    #[inline(always)]
     pub fn materials_where(&self, test: impl Fn(MaterialId) -> bool) -> u32 {
         match self.m.shared {
             Some(id) => self.live & 0u32.wrapping_sub(u32::from(test(id))),
-            None => each(self.live).fold(0, |m, k| m | u32::from(test(self.ids[k])) << k),
+            None => each::<N>(self.live).fold(0, |m, k| m | u32::from(test(self.ids[k])) << k),
         }
     }
 
-    /// Lane `k`'s surface, as [`Prims::surface`] gives it.
+    /// Lane `k`'s surface.
     #[inline(always)]
     pub fn surface(&self, k: usize) -> Surface {
         Surface {
@@ -191,14 +193,21 @@ impl<L: Lanes<N>, const N: usize> HitLanes<L, N> {
         }
     }
 
-    /// The refracted (0) and reflected (1) rays of the hits in `lanes` on smooth materials, from
-    /// just off each surface on the side each leaves to, with their weights: [`Whitted::bounces`]'
-    /// rays in lanes (Snell's refraction and Schlick's Fresnel split for transmitters, Ks for the
-    /// mirror), under the SPD's rules with `spd`.
-    ///
-    /// [`Whitted::bounces`]: crate::render::whitted::Whitted::bounces
+    /// The refracted (0) and reflected (1) rays of the hits in `lanes`, from just off each surface
+    /// on the side each leaves to, with their weights: Snell's refraction and Schlick's Fresnel split
+    /// for transmitters, Ks for the mirror, under the SPD's rules with `spd` (a transmitter always
+    /// spawns its mirror ray, of weight zero where Ks is 0, and its refracted ray but under a total
+    /// internal reflection; the light that finds no way out is all reflected, whatever Ks says). The
+    /// mirror direction of the lanes of `rough` is `perturb(k, mirror, geometric normal)`'s.
     #[inline(always)]
-    pub fn bounces(&self, scene: &Scene, lanes: u32, spd: bool) -> [Spawned<L, N>; 2] {
+    pub fn bounces(
+        &self,
+        scene: &Scene,
+        lanes: u32,
+        spd: bool,
+        rough: u32,
+        mut perturb: impl FnMut(usize, Vec3, Vec3) -> Vec3,
+    ) -> [Spawned<L, N>; 2] {
         let (m, d, eps) = (&self.m, self.dir, Fx::splat(EPSILON));
         let one = Fx::splat(1.0);
         let (mut kr, mut total, mut transmission) = (one, 0, Fx::splat(0.0));
@@ -240,17 +249,26 @@ impl<L: Lanes<N>, const N: usize> HitLanes<L, N> {
             m.ks * kr
         };
         let kept = weight.positive() | if spd { m.transmits } else { 0 };
+        let mut dir = reflect_lanes(d, self.ns).normalize();
+        let rough = rough & lanes & kept;
+        if rough != 0 {
+            let (mut mirror, ng) = (dir.lanes(), self.ng.lanes());
+            for k in each::<N>(rough) {
+                mirror[k] = perturb(k, mirror[k], ng[k]);
+            }
+            dir = V3::from_lanes(&mirror);
+        }
         let reflected = Spawned {
             lanes: lanes & kept,
             origin: self.p + self.ng * eps,
-            dir: reflect_lanes(d, self.ns).normalize(),
+            dir,
             weight,
         };
         [refracted, reflected]
     }
 
     /// Light sample positions `at` seen from the hits: the directions toward them and which lanes
-    /// they light (`ShadowRay::new` in lanes, up to its ray).
+    /// they light.
     #[inline(always)]
     pub fn toward(&self, at: V3<L, N>) -> ShadowLanes<L, N> {
         let l = (at - self.p).normalize();
@@ -264,7 +282,7 @@ impl<L: Lanes<N>, const N: usize> HitLanes<L, N> {
     }
 
     /// The shadow rays of `light`, from just off each surface on the light's side, and the distances
-    /// to the light (`ShadowRay::new`'s ray and distance in lanes).
+    /// to the light: anything hit before it casts the shadow.
     #[inline(always)]
     pub fn shadow_rays(&self, light: &ShadowLanes<L, N>) -> ([Ray; N], [f32; N]) {
         let eps = Fx::splat(EPSILON);
@@ -276,7 +294,8 @@ impl<L: Lanes<N>, const N: usize> HitLanes<L, N> {
     }
 
     /// Adds the light sample `toward`, of colour `light`, to `color` in the lanes of `seen` (lit
-    /// and not blocked): Kd·Cd·(n·L), plus Ks·Cs·(n·h)^shine where Ks > 0.
+    /// and not blocked): Blinn-Phong, Kd·Cd·(n·L), plus Ks·Cs·max(0, n·h)^shine where Ks > 0,
+    /// h = |L + V|.
     #[inline(always)]
     pub fn add_light(&self, color: &mut V3<L, N>, toward: &ShadowLanes<L, N>, seen: u32, light: Vec3) {
         if seen == 0 {
@@ -288,7 +307,7 @@ impl<L: Lanes<N>, const N: usize> HitLanes<L, N> {
         if glossy != 0 {
             let n_dot_h = (toward.l - self.dir).normalize().dot(self.ns).to_array();
             let mut power = [0.0; N];
-            for k in each(glossy) {
+            for k in each::<N>(glossy) {
                 power[k] = n_dot_h[k].max(0.0).powf(m.shininess[k]);
             }
             let highlight = m.specular * (m.ks * Fx::from(power));
