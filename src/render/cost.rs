@@ -7,7 +7,7 @@ use std::str::FromStr;
 use serde_json::{Map, Value, json};
 
 use super::heatmap::{Heatmap, Ramp, Scale, nearest_rank};
-use super::whitted::{RayCounts, RayKind};
+use super::stats::{RayCounts, RayKind};
 
 /// A per-pixel count of a heatmap.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

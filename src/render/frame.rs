@@ -11,8 +11,9 @@ use super::film::Film;
 use super::kernel::TilePixels;
 use super::options::Kernel;
 use super::renderer::Renderer;
+use super::stats::{Count, RayCounts, TileRays};
 use super::tiles::{self, TILE, Tile};
-use super::whitted::RayCounts;
+use crate::accel::{Counting, Plain};
 
 impl Renderer<'_> {
     /// Renders the frame (pass 1) on the current rayon pool.
@@ -75,16 +76,12 @@ impl Renderer<'_> {
                     return None;
                 }
                 let mut buf = [Vec3::ZERO; (TILE * TILE) as usize];
-                let mut rays = RayCounts::default();
-                // Each pixel's rays, where the render counts steps (for heatmaps).
-                let mut pixels = self
-                    .whitted
-                    .counts()
-                    .then(|| vec![RayCounts::default(); (TILE * TILE) as usize]);
-                let per_pixel = pixels.as_deref_mut();
-                match self.options.kernel {
-                    Kernel::Single => self.tile_single(tile, pass, &mut buf, &mut rays, per_pixel, stop),
-                    Kernel::Packet => self.tile_packets(tile, pass, &mut buf, &mut rays, per_pixel, stop),
+                // Each pixel's rays kept apart where the render counts steps (for heatmaps).
+                let mut rays = TileRays::new(self.counting());
+                if self.counting() {
+                    self.tile::<Counting>(tile, pass, &mut buf, &mut rays, stop);
+                } else {
+                    self.tile::<Plain>(tile, pass, &mut buf, &mut rays, stop);
                 }
                 // A kernel stops within its tile once `stop` is set (a tile of many samples a pixel
                 // takes long): what it left may be half done, so none of it is kept.
@@ -92,15 +89,31 @@ impl Renderer<'_> {
                     return None;
                 }
                 on_tile();
-                Some((tile, buf, rays, pixels))
+                Some((tile, buf, rays))
             })
             .collect();
         TilePass { tiles }
     }
+
+    /// Renders `tile` for pass `pass` with the chosen kernel into `buf`, its rays counted into `rays`
+    /// (and their steps where `C` counts them).
+    fn tile<C: Count>(
+        &self,
+        tile: Tile,
+        pass: u32,
+        buf: &mut TilePixels,
+        rays: &mut TileRays,
+        stop: &AtomicBool,
+    ) {
+        match self.options.kernel {
+            Kernel::Single => self.tile_single::<C>(tile, pass, buf, rays, stop),
+            Kernel::Packet => self.tile_packets::<C>(tile, pass, buf, rays, stop),
+        }
+    }
 }
 
 /// A tile's pixels and the rays they took.
-type TileDone = (Tile, TilePixels, RayCounts, Option<Vec<RayCounts>>);
+type TileDone = (Tile, TilePixels, TileRays);
 
 /// A pass over some tiles as [`Renderer::render_tiles`] left it: every tile's pixels, or, if it was
 /// stopped, those of the tiles finished before the stop (so that an interrupted render can keep them).
@@ -124,8 +137,8 @@ impl TilePass {
     /// The rays the finished tiles traced.
     pub fn rays(&self) -> RayCounts {
         let mut rays = RayCounts::default();
-        for (_, _, r, _) in self.tiles.iter().flatten() {
-            rays += *r;
+        for (_, _, r) in self.tiles.iter().flatten() {
+            rays += r.total;
         }
         rays
     }
@@ -133,7 +146,7 @@ impl TilePass {
     /// Hands each finished tile and its pixels (row-major at a stride of [`TILE`]) to `sink`, in the
     /// order the tiles were asked for.
     pub fn for_each(&self, mut sink: impl FnMut(Tile, &[Vec3])) {
-        for (tile, buf, _, _) in self.tiles.iter().flatten() {
+        for (tile, buf, _) in self.tiles.iter().flatten() {
             sink(*tile, buf);
         }
     }
@@ -141,8 +154,8 @@ impl TilePass {
     /// Each finished tile and its pixels' rays (row by row, [`TILE`] a row), where the render counted
     /// steps ([`super::Options::count_steps`]).
     pub fn for_each_pixel_rays(&self, mut sink: impl FnMut(Tile, &[RayCounts])) {
-        for (tile, _, _, pixels) in self.tiles.iter().flatten() {
-            if let Some(p) = pixels {
+        for (tile, _, rays) in self.tiles.iter().flatten() {
+            if let Some(p) = &rays.pixels {
                 sink(*tile, p);
             }
         }

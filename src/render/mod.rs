@@ -5,12 +5,13 @@
 //!   samples ([`sampler`]: jittered positions, lens points, light points, random numbers) and makes
 //!   their camera rays ([`camera`]); a kernel (`kernel/`: single rays or packets, [`Kernel`])
 //!   traces and shades them;
-//! - [`whitted`]: the integrator traces each ray through the accelerator
-//!   ([`crate::accel::Accel::intersect`]), shades the closest hit (Blinn-Phong over the light samples of
-//!   [`light`], each behind a shadow ray, [`crate::accel::Accel::occluded`]) and recurses into the
-//!   reflected and refracted rays ([`optics`]); a ray that leaves the scene sees the background
-//!   ([`env`](mod@env)). With [`Kernel::Packet`], `kernel/packet.rs` does the same for eight neighbouring
-//!   pixels at a time through the accelerators' packet verbs;
+//! - `whitted.rs`: the integrator traces rays through the accelerator, one or a packet of eight with
+//!   the same code ([`crate::accel::Accel::intersect`], [`crate::accel::Accel::intersect_packet`]),
+//!   shades the closest hits in lanes (`shade.rs`: Blinn-Phong over the light samples of [`light`],
+//!   each behind a shadow ray, [`crate::accel::Accel::occluded`]) and recurses into the reflected and
+//!   refracted rays ([`optics`]); a ray that leaves the scene sees the background
+//!   ([`env`](mod@env)). The single-ray kernel runs it on one lane, [`Kernel::Packet`] on eight
+//!   neighbouring pixels' rays;
 //! - the colours land in a linear [`film::Film`], or in a [`progressive::Progressive`] sum of passes,
 //!   written as an image at the end (or as a `.partial` part of a frame, [`crate::parts`]).
 
@@ -32,9 +33,11 @@ mod renderer;
 pub mod sampler;
 mod shade;
 pub mod spd;
+mod stats;
 pub mod tiles;
-pub mod whitted;
+mod whitted;
 
 pub use options::{DEFAULT_DEPTH, Kernel, MAX_DEPTH, MAX_SPP, Options};
 pub use renderer::Renderer;
-pub use whitted::RayCounts;
+pub use shade::EPSILON;
+pub use stats::{KindSteps, RayCounts, RayKind};

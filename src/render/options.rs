@@ -57,7 +57,7 @@ pub const MAX_SPP: u32 = 256 * 256;
 /// eight rays' state per level: 64 levels among nested glass spheres fit in 512 KiB of stack (and
 /// overflow 256 KiB), a quarter of a rayon worker's 2 MiB (`tests/render/limits.rs` renders them on such a
 /// worker); the 3,000 bounces once accepted needed about 50 times that. However deep a tree may go, it
-/// cannot grow past a fixed number of rays ([`super::whitted`]'s split budget).
+/// cannot grow past a fixed number of rays (the integrator's split budget, `whitted.rs`).
 pub const MAX_DEPTH: u32 = 64;
 
 /// The bounce limit unless one is asked for (the course's renderers stop at 6).
@@ -87,7 +87,7 @@ pub struct Options {
     /// (`width` − 1) × (`height` − 1) image ([`super::spd::corners_to_pixels`] averages them into it),
     /// and a total internal reflection spawns its mirror ray whatever the material's `Ks`. Needs spp 0.
     pub spd: bool,
-    /// Count each ray's steps (nodes visited, primitives tested) into [`super::whitted::RayCounts::steps`],
+    /// Count each ray's steps (nodes visited, primitives tested) into [`super::RayCounts::steps`],
     /// through the accelerator's counting verbs ([`crate::accel::Accel::counting`]).
     pub count_steps: bool,
 }

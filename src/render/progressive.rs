@@ -17,8 +17,8 @@ use glam::Vec3;
 use super::Renderer;
 use super::film::Film;
 use super::frame::TilePass;
+use super::stats::RayCounts;
 use super::tiles::{self, TILE, Tile};
-use super::whitted::RayCounts;
 
 /// Per-pixel sums of the passes so far over a set of tiles.
 #[derive(Clone, Debug)]

@@ -14,8 +14,9 @@ use super::camera::RayCamera;
 use super::env::Background;
 use super::options::Options;
 use super::sampler::{PixelKey, PixelPattern, Sampler};
-use super::whitted::{PixelSample, RayKind, SampleRays, Whitted};
-use crate::accel::{Accel, Simd};
+use super::stats::{Count, RayKind, SampleRays};
+use super::whitted::{PixelSample, Whitted};
+use crate::accel::{Accel, Plain, Simd};
 use crate::digest::mix;
 use crate::geometry::ray::Ray;
 use crate::scene::{Camera, Scene};
@@ -38,6 +39,9 @@ pub struct Renderer<'a> {
     draws: bool,
     /// The instruction set the packet kernel's tiles run on: the wide BVH's, else the CPU's best.
     simd: Simd,
+    /// Whether the frame counts each ray's steps: asked for ([`Options::count_steps`]) and counted by
+    /// the accelerator ([`Accel::counts_steps`]).
+    counting: bool,
     /// What the renderer fell back on (a skybox that did not load, say), for the user to see.
     pub warnings: Vec<String>,
 }
@@ -93,11 +97,6 @@ impl<'a> Renderer<'a> {
             RayCamera::new(camera, options.width, options.height)
         };
         let draws = camera.has_lens() || whitted.has_rough_mirrors();
-        let whitted = if options.count_steps {
-            whitted.counting()
-        } else {
-            whitted
-        };
         Renderer {
             whitted,
             // At spp 0 the camera rays go through the pixel centres from the eye (a pinhole).
@@ -107,6 +106,7 @@ impl<'a> Renderer<'a> {
             seed_key: mix(options.seed),
             draws,
             simd: accel.simd().and_then(Simd::new).unwrap_or_else(Simd::detect),
+            counting: options.count_steps && accel.counts_steps(),
             options,
             warnings,
         }
@@ -136,7 +136,13 @@ impl<'a> Renderer<'a> {
     /// The light samples and random numbers of sample `s` of pixel `pixel` in pass `pass` (the light
     /// point `uv` is the sample's paired point of the pattern; unused at spp 0).
     #[inline]
-    pub(super) fn pixel_sample(&self, pass: u32, pixel: PixelKey, s: u32, uv: Vec2) -> PixelSample<'_> {
+    pub(super) fn pixel_sample<C: Count>(
+        &self,
+        pass: u32,
+        pixel: PixelKey,
+        s: u32,
+        uv: Vec2,
+    ) -> PixelSample<'_, C> {
         PixelSample {
             lights: self.whitted.lights(uv),
             rng: if self.draws {
@@ -145,7 +151,7 @@ impl<'a> Renderer<'a> {
                 Sampler::unused()
             },
             rays: SampleRays::default(),
-            slot: 0,
+            steps: C::Steps::default(),
         }
     }
 
@@ -154,14 +160,14 @@ impl<'a> Renderer<'a> {
     /// at a time) and what the sample carries. `pattern` must be the pixel's, filled for this pass
     /// ([`fill_pattern`](Self::fill_pattern)); at one sample a pixel it is not read.
     #[inline]
-    pub(super) fn sample_start(
+    pub(super) fn sample_start<C: Count>(
         &self,
         x: u32,
         y: u32,
         pass: u32,
         s: u32,
         pattern: &PixelPattern,
-    ) -> (Vec2, Option<Vec2>, PixelSample<'_>) {
+    ) -> (Vec2, Option<Vec2>, PixelSample<'_, C>) {
         let key = self.pixel_key(x, y);
         let corner = Vec2::new(x as f32, y as f32);
         if self.side == 0 {
@@ -192,6 +198,11 @@ impl<'a> Renderer<'a> {
         self.simd
     }
 
+    /// Whether the frame counts each ray's steps.
+    pub(super) fn counting(&self) -> bool {
+        self.counting
+    }
+
     /// The camera, for the kernels' rays.
     pub(super) fn camera(&self) -> &RayCamera {
         &self.camera
@@ -217,7 +228,7 @@ impl<'a> Renderer<'a> {
             ray,
             0,
             RayKind::Camera,
-            &mut self.pixel_sample(1, self.pixel_key(0, 0), 0, Vec2::splat(0.5)),
+            &mut self.pixel_sample::<Plain>(1, self.pixel_key(0, 0), 0, Vec2::splat(0.5)),
         )
     }
 }

@@ -18,7 +18,7 @@
 
 use super::film::Film;
 use super::options::Options;
-use super::whitted::RayCounts;
+use super::stats::RayCounts;
 use crate::scene::Scene;
 
 /// Image side of the procedure.

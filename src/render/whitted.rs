@@ -16,206 +16,23 @@ use super::optics::beer;
 use super::options::MAX_DEPTH;
 use super::sampler::Sampler;
 use super::shade::{HitLanes, light};
-use crate::accel::counters::{self, Steps};
+use super::stats::{Count, RayKind, SampleRays};
 use crate::accel::lanes::Lanes8;
-use crate::accel::{Accel, Counting, Hit, PACKET, Plain, Prims, Tally, Verbs};
+use crate::accel::{Accel, Hit, PACKET, Prims, Tally, Verbs};
 use crate::geometry::ray::Ray;
 use crate::scene::{QuadLight, Scene};
 
-pub use super::shade::EPSILON;
-
-/// Rays traced, by kind.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RayCounts {
-    /// Camera rays.
-    pub primary: u64,
-    /// Camera rays that hit something (not counted in [`RayCounts::total`]: they are camera rays).
-    pub primary_hits: u64,
-    /// Shadow rays (any hit).
-    pub shadow: u64,
-    /// Mirror rays.
-    pub reflected: u64,
-    /// Refracted rays.
-    pub refracted: u64,
-    /// The steps of the rays of each kind, when the render counts them ([`Options::count_steps`]).
-    ///
-    /// [`Options::count_steps`]: super::options::Options::count_steps
-    pub steps: KindSteps,
-}
-
-/// Which kind a traced ray is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum RayKind {
-    /// From the camera.
-    Camera,
-    /// Toward a light sample (any hit).
-    Shadow,
-    /// Off a mirror.
-    Reflected,
-    /// Through a transmitter.
-    Refracted,
-}
-
-impl RayKind {
-    /// The kind of a hit's secondary ray `i`: 0 refracted, 1 reflected (the order in which a hit's
-    /// rays are traced).
-    pub fn secondary(i: usize) -> RayKind {
-        if i == 0 {
-            RayKind::Refracted
-        } else {
-            RayKind::Reflected
-        }
-    }
-}
-
-/// Steps ([`Steps`]: nodes visited, primitives tested) summed over the rays of each kind.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct KindSteps {
-    /// Camera rays'.
-    pub camera: Steps,
-    /// Shadow rays'.
-    pub shadow: Steps,
-    /// Mirror rays'.
-    pub reflected: Steps,
-    /// Refracted rays'.
-    pub refracted: Steps,
-}
-
-impl KindSteps {
-    /// The steps of `kind`.
-    pub fn get(&self, kind: RayKind) -> Steps {
-        match kind {
-            RayKind::Camera => self.camera,
-            RayKind::Shadow => self.shadow,
-            RayKind::Reflected => self.reflected,
-            RayKind::Refracted => self.refracted,
-        }
-    }
-
-    /// The steps of `kind`, to add to.
-    pub fn of(&mut self, kind: RayKind) -> &mut Steps {
-        match kind {
-            RayKind::Camera => &mut self.camera,
-            RayKind::Shadow => &mut self.shadow,
-            RayKind::Reflected => &mut self.reflected,
-            RayKind::Refracted => &mut self.refracted,
-        }
-    }
-
-    /// All kinds' steps.
-    pub fn total(&self) -> Steps {
-        let mut all = self.camera;
-        for s in [self.shadow, self.reflected, self.refracted] {
-            all += s;
-        }
-        all
-    }
-}
-
-impl std::ops::AddAssign for KindSteps {
-    fn add_assign(&mut self, o: KindSteps) {
-        self.camera += o.camera;
-        self.shadow += o.shadow;
-        self.reflected += o.reflected;
-        self.refracted += o.refracted;
-    }
-}
-
-impl RayCounts {
-    /// All rays.
-    pub fn total(&self) -> u64 {
-        self.primary + self.shadow + self.reflected + self.refracted
-    }
-}
-
-/// The rays one pixel sample traced, by kind: [`RayCounts`] without the steps, which a counting
-/// render keeps apart (`charge`), so that a sample carries no more than it did before counting.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct SampleRays {
-    /// Camera rays.
-    pub primary: u64,
-    /// Camera rays that hit something.
-    pub primary_hits: u64,
-    /// Shadow rays.
-    pub shadow: u64,
-    /// Mirror rays.
-    pub reflected: u64,
-    /// Refracted rays.
-    pub refracted: u64,
-}
-
-impl SampleRays {
-    /// Whether these rays have spent the split budget (`SPLIT_BUDGET`): a hit that would spawn
-    /// both a refracted and a reflected ray then spawns only the heavier.
-    #[inline]
-    pub fn budget_spent(&self) -> bool {
-        self.reflected + self.refracted >= SPLIT_BUDGET
-    }
-}
-
-impl std::ops::AddAssign<SampleRays> for RayCounts {
-    fn add_assign(&mut self, o: SampleRays) {
-        self.primary += o.primary;
-        self.primary_hits += o.primary_hits;
-        self.shadow += o.shadow;
-        self.reflected += o.reflected;
-        self.refracted += o.refracted;
-    }
-}
-
-thread_local! {
-    /// A counting render's steps of each pixel sample in flight on this worker, by its slot
-    /// ([`PixelSample::slot`]): charged as its rays are traced, taken when the sample is summed.
-    static SAMPLE_STEPS: std::cell::RefCell<Vec<KindSteps>> = const { std::cell::RefCell::new(Vec::new()) };
-}
-
-/// Runs `f` in a call of its own, marked cold: a counting render's verbs, kept out of the plain
-/// frame's hot loops (inlined there, they lengthen the plain frame, `profiles/frame.sh`).
-#[cold]
-#[inline(never)]
-pub(super) fn out_of_line<R>(f: impl FnOnce() -> R) -> R {
-    f()
-}
-
-/// Adds `steps`, of a ray of `kind`, to the sample in `slot`.
-pub(super) fn charge(slot: u32, kind: RayKind, steps: Steps) {
-    SAMPLE_STEPS.with_borrow_mut(|all| {
-        let slot = slot as usize;
-        if all.len() <= slot {
-            all.resize(slot + 1, KindSteps::default());
-        }
-        *all[slot].of(kind) += steps;
-    });
-}
-
-/// The steps charged to the sample in `slot`, which starts again from none.
-pub(super) fn take_steps(slot: u32) -> KindSteps {
-    SAMPLE_STEPS.with_borrow_mut(|all| all.get_mut(slot as usize).map(std::mem::take).unwrap_or_default())
-}
-
-impl std::ops::AddAssign for RayCounts {
-    fn add_assign(&mut self, o: RayCounts) {
-        self.primary += o.primary;
-        self.primary_hits += o.primary_hits;
-        self.shadow += o.shadow;
-        self.reflected += o.reflected;
-        self.refracted += o.refracted;
-        self.steps += o.steps;
-    }
-}
-
 /// What one pixel sample carries down its ray tree: the light samples it sees, its random numbers, and
-/// the count of rays it traced.
-pub struct PixelSample<'a> {
+/// the rays it traced (and, in a counting render, their steps).
+pub struct PixelSample<'a, C: Count> {
     /// Light samples (the quad lights at this sample's paired point).
     pub lights: Lights<'a>,
     /// This sample's generator (fuzzy reflections).
     pub rng: Sampler,
     /// Rays traced for this sample so far.
     pub rays: SampleRays,
-    /// Where a counting render keeps this sample's steps (`charge`): unique among the samples a
-    /// worker has in flight.
-    pub slot: u32,
+    /// Their steps, by kind: nothing unless `C` counts.
+    pub steps: C::Steps,
 }
 
 /// Tries at drawing a fuzzy reflection above the surface before settling for the mirror direction.
@@ -253,8 +70,6 @@ pub struct Whitted<'a> {
     /// The SPD rules ([`super::spd`]): a hit on a transmitter always spawns its mirror ray (of weight
     /// zero where Ks is 0) and, but for a total internal reflection, its refracted ray.
     spd: bool,
-    /// Count each ray's steps ([`Whitted::counting`]).
-    count: bool,
 }
 
 impl<'a> Whitted<'a> {
@@ -290,7 +105,6 @@ impl<'a> Whitted<'a> {
             // Unvalidated options are clamped rather than allowed to overflow the stack.
             max_depth: max_depth.min(MAX_DEPTH),
             spd,
-            count: false,
         }
     }
 
@@ -308,18 +122,6 @@ impl<'a> Whitted<'a> {
         Lights::new(&self.fixed_lights, self.quads, uv)
     }
 
-    /// The integrator counting each ray's steps into its sample's [`RayCounts::steps`], where the
-    /// accelerator counts them ([`Accel::counts_steps`]).
-    pub fn counting(mut self) -> Self {
-        self.count = self.accel.counts_steps();
-        self
-    }
-
-    /// Whether the integrator counts steps.
-    pub fn counts(&self) -> bool {
-        self.count
-    }
-
     /// Whether some material has a roughness: where it reflects, its mirror rays draw from the pixel
     /// sample's generator ([`fuzz`]).
     pub(super) fn has_rough_mirrors(&self) -> bool {
@@ -334,8 +136,8 @@ impl<'a> Whitted<'a> {
     /// The colour seen along `ray` (unit direction), a ray of `kind`, after `depth` bounces: the
     /// one-lane instance of the integrator's walk over lanes (`Whitted::trace_lanes`), which the packet
     /// kernel runs on eight.
-    pub fn trace(&self, ray: &Ray, depth: u32, kind: RayKind, sample: &mut PixelSample) -> Vec3 {
-        let seen = self.trace_lanes::<f32, 1>(
+    pub fn trace<C: Count>(&self, ray: &Ray, depth: u32, kind: RayKind, sample: &mut PixelSample<C>) -> Vec3 {
+        let seen = self.trace_lanes::<C, f32, 1>(
             std::array::from_ref(ray),
             1,
             depth,
@@ -354,25 +156,19 @@ impl<'a> Whitted<'a> {
     /// sample's depth-first order, so a sample gets the same colour whatever lanes it shares.
     // Not inlined (it recurses): its body on the lanes' instructions (`Lanes::call`).
     #[inline(never)]
-    pub(super) fn trace_lanes<L: Width<N>, const N: usize>(
+    pub(super) fn trace_lanes<C: Count, L: Width<N>, const N: usize>(
         &self,
         rays: &[Ray; N],
         active: u32,
         depth: u32,
         kind: RayKind,
-        samples: &mut [PixelSample; N],
+        samples: &mut [PixelSample<C>; N],
     ) -> V3<L, N> {
         L::call(
             #[inline(always)]
             || {
                 let mut hits = [Hit::miss(f32::INFINITY); N];
-                let hit = if self.count {
-                    out_of_line(|| {
-                        closest_tallied::<Counting, L, N>(self, rays, active, kind, samples, &mut hits)
-                    })
-                } else {
-                    closest_tallied::<Plain, L, N>(self, rays, active, kind, samples, &mut hits)
-                };
+                let hit = closest_tallied::<C, L, N>(self, rays, active, kind, samples, &mut hits);
                 if depth == 0 {
                     for k in each::<N>(hit) {
                         samples[k].rays.primary_hits += 1;
@@ -416,13 +212,13 @@ impl<'a> Whitted<'a> {
     /// or their directions point into different octants (rays off a curved mirror, say), which share
     /// few nodes (faster: `profiles/README.md`, tuned constants).
     #[inline(always)]
-    fn trace_spawned<L: Width<N>, const N: usize>(
+    fn trace_spawned<C: Count, L: Width<N>, const N: usize>(
         &self,
         rays: &[Ray; N],
         mask: u32,
         depth: u32,
         kind: RayKind,
-        samples: &mut [PixelSample; N],
+        samples: &mut [PixelSample<C>; N],
     ) -> V3<L, N> {
         if N == 1 || coherent(each::<N>(mask).map(|k| &rays[k])) {
             return self.trace_lanes(rays, mask, depth, kind, samples);
@@ -440,10 +236,10 @@ impl<'a> Whitted<'a> {
     // Its body on the lanes' instructions (`Lanes::call`: for eight lanes a function of its own, a
     // phase of `profiles/frame.sh`).
     #[inline(always)]
-    fn local_lanes<L: Width<N>, const N: usize>(
+    fn local_lanes<C: Count, L: Width<N>, const N: usize>(
         &self,
         h: &HitLanes<L, N>,
-        samples: &mut [PixelSample; N],
+        samples: &mut [PixelSample<C>; N],
     ) -> V3<L, N> {
         L::call(
             #[inline(always)]
@@ -461,13 +257,7 @@ impl<'a> Whitted<'a> {
                         samples[k].rays.shadow += 1;
                     }
                     let (shadows, distance) = h.shadow_rays(&toward);
-                    let blocked = if self.count {
-                        out_of_line(|| {
-                            blocked_tallied::<Counting, L, N>(self, &shadows, lit, &distance, samples)
-                        })
-                    } else {
-                        blocked_tallied::<Plain, L, N>(self, &shadows, lit, &distance, samples)
-                    };
+                    let blocked = blocked_tallied::<C, L, N>(self, &shadows, lit, &distance, samples);
                     h.add_light(&mut color, &toward, lit & !blocked, light);
                 }
                 color
@@ -480,10 +270,10 @@ impl<'a> Whitted<'a> {
     /// of the two where a sample has spent its [`SPLIT_BUDGET`] (on a tie the mirror ray, the one a
     /// total internal reflection keeps).
     #[inline(always)]
-    fn spawn<L: Lanes<N>, const N: usize>(
+    fn spawn<C: Count, L: Lanes<N>, const N: usize>(
         &self,
         h: &HitLanes<L, N>,
-        samples: &mut [PixelSample; N],
+        samples: &mut [PixelSample<C>; N],
     ) -> [super::shade::Spawned<L, N>; 2] {
         let rough = h.materials_where(|m| self.roughness[m as usize] > 0.0);
         let [mut refracted, mut reflected] =
@@ -492,7 +282,7 @@ impl<'a> Whitted<'a> {
                 fuzz(mirror, ng, roughness, &mut samples[k].rng)
             });
         let both = refracted.lanes & reflected.lanes;
-        let spent = each::<N>(both).fold(0, |m, k| m | u32::from(samples[k].rays.budget_spent()) << k);
+        let spent = each::<N>(both).fold(0, |m, k| m | u32::from(budget_spent(&samples[k].rays)) << k);
         if spent != 0 {
             let heavier = spent & refracted.weight.gt(reflected.weight);
             reflected.lanes &= !heavier;
@@ -590,43 +380,50 @@ impl<L: Lanes8> Width<PACKET> for L {
     }
 }
 
-/// [`Whitted::trace_lanes`]' closest hits through the verbs of `T`, counted into each lane's sample
-/// as rays of `kind` when `T` counts.
+/// [`Whitted::trace_lanes`]' closest hits through the verbs of `C`, their steps charged to each
+/// lane's sample as rays of `kind` when `C` counts.
 #[inline(always)]
-fn closest_tallied<T: Tally, L: Width<N>, const N: usize>(
+fn closest_tallied<C: Count, L: Width<N>, const N: usize>(
     whitted: &Whitted,
     rays: &[Ray; N],
     active: u32,
     kind: RayKind,
-    samples: &[PixelSample; N],
+    samples: &mut [PixelSample<C>; N],
     hits: &mut [Hit; N],
 ) -> u32 {
-    let hit = L::closest(whitted.accel.verbs::<T>(), rays, active, kind, hits);
-    if T::COUNTS {
+    let hit = L::closest(whitted.accel.verbs::<C>(), rays, active, kind, hits);
+    if C::COUNTS {
         for k in each::<N>(active) {
-            charge(samples[k].slot, kind, counters::lane(k));
+            C::charge(&mut samples[k].steps, kind, k);
         }
     }
     hit
 }
 
-/// Which of the shadow rays `rays` in `active` are blocked, through the verbs of `T`, counted into
-/// each lane's sample when `T` counts.
+/// Which of the shadow rays `rays` in `active` are blocked, through the verbs of `C`, their steps
+/// charged to each lane's sample when `C` counts.
 #[inline(always)]
-fn blocked_tallied<T: Tally, L: Width<N>, const N: usize>(
+fn blocked_tallied<C: Count, L: Width<N>, const N: usize>(
     whitted: &Whitted,
     rays: &[Ray; N],
     active: u32,
     t_max: &[f32; N],
-    samples: &[PixelSample; N],
+    samples: &mut [PixelSample<C>; N],
 ) -> u32 {
-    let blocked = L::blocked(whitted.accel.verbs::<T>(), rays, active, t_max);
-    if T::COUNTS {
+    let blocked = L::blocked(whitted.accel.verbs::<C>(), rays, active, t_max);
+    if C::COUNTS {
         for k in each::<N>(active) {
-            charge(samples[k].slot, RayKind::Shadow, counters::lane(k));
+            C::charge(&mut samples[k].steps, RayKind::Shadow, k);
         }
     }
     blocked
+}
+
+/// Whether a sample's rays have spent the [`SPLIT_BUDGET`]: a hit that would spawn both a refracted and
+/// a reflected ray then spawns only the heavier.
+#[inline]
+fn budget_spent(rays: &SampleRays) -> bool {
+    rays.reflected + rays.refracted >= SPLIT_BUDGET
 }
 
 /// Whether `rays` (up to a packet's worth) are worth tracing together: at least [`MIN_LANES`] of

@@ -17,7 +17,7 @@
 use glam::{DVec3, Vec3};
 use whitted::accel::{Accel, AccelKind, Prims};
 use whitted::geometry::ray::Ray;
-use whitted::render::whitted::EPSILON;
+use whitted::render::EPSILON;
 use whitted::render::{Options, Renderer};
 use whitted::scene::{Camera, Material, Scene};
 

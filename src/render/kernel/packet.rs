@@ -9,6 +9,7 @@
 //!
 //! [`Whitted::trace_lanes`]: crate::render::whitted::Whitted::trace_lanes
 
+use std::marker::PhantomData;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::{Vec2, Vec3};
@@ -20,26 +21,27 @@ use crate::geometry::ray::Ray;
 use crate::render::lanes::{Fx, V3, each};
 use crate::render::renderer::Renderer;
 use crate::render::sampler::PixelPattern;
+use crate::render::stats::{Count, RayKind, TileRays};
 use crate::render::tiles::{TILE, Tile};
-use crate::render::whitted::{PixelSample, RayCounts, RayKind, take_steps};
+use crate::render::whitted::PixelSample;
 
 impl Renderer<'_> {
     /// Sample `s` of the pixels of a packet's `active` lanes (lane `k` at `pixel(k)`, its pattern
     /// `patterns[k]`): their camera rays, a pinhole's eight at once ([`RayCamera::rays`]), and what
-    /// each carries, its slot its lane, written in place into the block's `rays` and `samples`.
+    /// each carries, written in place into the block's `rays` and `samples`.
     ///
     /// [`RayCamera::rays`]: crate::render::camera::RayCamera::rays
     // Not inlined: a phase of `profiles/frame.sh`, called once a packet (its body on the frame's
     // lanes, `Lanes::call`).
     #[inline(never)]
-    fn camera_packet<'s, L: Lanes8>(
+    fn camera_packet<'s, C: Count, L: Lanes8>(
         &'s self,
         pixel: impl Fn(usize) -> (u32, u32),
         active: u32,
         pass: u32,
         s: u32,
         patterns: &PerRay<PixelPattern>,
-        (rays, samples): (&mut PerRay<Ray>, &mut PerRay<PixelSample<'s>>),
+        (rays, samples): (&mut PerRay<Ray>, &mut PerRay<PixelSample<'s, C>>),
     ) {
         L::call(
             #[inline(always)]
@@ -53,10 +55,7 @@ impl Renderer<'_> {
                         let (x, y) = pixel(k);
                         let (point, lens_point, sample) = self.sample_start(x, y, pass, s, &patterns[k]);
                         (at[k], lens[k]) = (point, lens_point);
-                        PixelSample {
-                            slot: k as u32,
-                            ..sample
-                        }
+                        sample
                     };
                 }
                 let camera = self.camera();
@@ -72,43 +71,41 @@ impl Renderer<'_> {
 
     /// Shades `tile` for pass `pass`, packet by packet (pixels outside the image are inactive lanes),
     /// into `buf`: sample `s` of eight pixels at a time, each lane with its pixel's own pattern and
-    /// random numbers, summed per pixel in sample order as the single-ray path sums them; given
-    /// `pixels`, each pixel's rays are counted into its own (row by row, [`TILE`] a row). Leaves the
-    /// tile half done once `stop` is set. The whole tile, camera rays to film, runs on the lanes of
-    /// the instruction set chosen for the frame.
-    pub(in crate::render) fn tile_packets(
+    /// random numbers, summed per pixel in sample order as the single-ray path sums them, the rays
+    /// counted into `rays`. Leaves the tile half done once `stop` is set. The whole tile, camera rays
+    /// to film, runs on the lanes of the instruction set chosen for the frame.
+    pub(in crate::render) fn tile_packets<C: Count>(
         &self,
         tile: Tile,
         pass: u32,
         buf: &mut TilePixels,
-        rays_traced: &mut RayCounts,
-        pixels: Option<&mut [RayCounts]>,
+        rays: &mut TileRays,
         stop: &AtomicBool,
     ) {
-        self.simd().run8(TilePackets {
+        self.simd().run8(TilePackets::<C> {
             renderer: self,
             tile,
             pass,
             buf,
-            rays_traced,
-            pixels,
+            rays,
             stop,
+            count: PhantomData,
         });
     }
 }
 
-/// [`Renderer::tile_packets`]'s work, for `Simd::run8` to run on the lanes it chose.
-struct TilePackets<'r, 'a> {
+/// [`Renderer::tile_packets`]' work, for `Simd::run8` to run on the lanes it chose.
+struct TilePackets<'r, 'a, C> {
     renderer: &'r Renderer<'a>,
     tile: Tile,
     pass: u32,
     buf: &'r mut TilePixels,
-    rays_traced: &'r mut RayCounts,
-    pixels: Option<&'r mut [RayCounts]>,
+    rays: &'r mut TileRays,
     stop: &'r AtomicBool,
+    count: PhantomData<C>,
 }
 
-impl OnLanes8 for TilePackets<'_, '_> {
+impl<C: Count> OnLanes8 for TilePackets<'_, '_, C> {
     type Output = ();
 
     #[inline(always)]
@@ -118,14 +115,14 @@ impl OnLanes8 for TilePackets<'_, '_> {
             tile,
             pass,
             buf,
-            rays_traced,
-            mut pixels,
+            rays: traced,
             stop,
+            ..
         } = self;
         let mut patterns: PerRay<PixelPattern> = Default::default();
         // Filled in place for each sample of each block (built here once: no copy of the eight).
         let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); PACKET];
-        let mut samples: PerRay<PixelSample> =
+        let mut samples: PerRay<PixelSample<C>> =
             std::array::from_fn(|_| r.pixel_sample(pass, r.pixel_key(0, 0), 0, Vec2::ZERO));
         for y0 in (tile.y0..tile.y1).step_by(BLOCK_H as usize) {
             for x0 in (tile.x0..tile.x1).step_by(BLOCK_W as usize) {
@@ -133,6 +130,10 @@ impl OnLanes8 for TilePackets<'_, '_> {
                     return;
                 }
                 let pixel = |k: usize| (x0 + k as u32 % BLOCK_W, y0 + k as u32 / BLOCK_W);
+                let index = |k: usize| {
+                    let (x, y) = pixel(k);
+                    ((y - tile.y0) * TILE + (x - tile.x0)) as usize
+                };
                 let mut active = 0u32;
                 for (k, pattern) in patterns.iter_mut().enumerate() {
                     let (x, y) = pixel(k);
@@ -143,28 +144,22 @@ impl OnLanes8 for TilePackets<'_, '_> {
                 }
                 let mut sums = V3::<L, PACKET>::zero();
                 for s in 0..r.samples() {
-                    r.camera_packet::<L>(pixel, active, pass, s, &patterns, (&mut rays, &mut samples));
-                    let colors =
-                        r.whitted
-                            .trace_lanes::<L, PACKET>(&rays, active, 0, RayKind::Camera, &mut samples);
+                    r.camera_packet::<C, L>(pixel, active, pass, s, &patterns, (&mut rays, &mut samples));
+                    let colors = r.whitted.trace_lanes::<C, L, PACKET>(
+                        &rays,
+                        active,
+                        0,
+                        RayKind::Camera,
+                        &mut samples,
+                    );
                     sums = sums + colors;
                     for k in each::<PACKET>(active) {
-                        samples[k].rays.primary += 1;
-                        *rays_traced += samples[k].rays;
-                        if let Some(p) = pixels.as_deref_mut() {
-                            let (x, y) = pixel(k);
-                            let steps = take_steps(k as u32);
-                            rays_traced.steps += steps;
-                            let p = &mut p[((y - tile.y0) * TILE + (x - tile.x0)) as usize];
-                            *p += samples[k].rays;
-                            p.steps += steps;
-                        }
+                        traced.add::<C>(index(k), &samples[k].rays, &samples[k].steps);
                     }
                 }
                 let means = (sums / Fx::splat(r.samples() as f32)).lanes();
                 for k in each::<PACKET>(active) {
-                    let (x, y) = pixel(k);
-                    buf[((y - tile.y0) * TILE + (x - tile.x0)) as usize] = means[k];
+                    buf[index(k)] = means[k];
                 }
             }
         }
