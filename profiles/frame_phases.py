@@ -107,7 +107,7 @@ def main():
     first_level = lambda c: "trace_lanes" in c and not recursive(c)  # noqa: E731
     deeper = lambda c: "trace_lanes" in c and recursive(c)  # noqa: E731
     phases = [
-        ("camera rays and their samples (Renderer::camera_packet)", inclusive("::camera_packet"), "primary"),
+        ("camera rays and their samples (camera_packet)", inclusive("::camera_packet"), "primary"),
         ("sample patterns (PixelPattern::fill, spp > 1 only)", inclusive("PixelPattern::fill"), "primary"),
         ("traversal, camera rays (packets)", called_by("Accel::intersect_packet", first_level), "primary"),
         (

@@ -235,8 +235,9 @@ impl<'a> Accel<'a> {
         each!(self, s => Structure::simd(s))
     }
 
-    /// Makes a wide BVH use `simd` (tests and benchmarks compare the paths); false, with nothing
-    /// changed, when the CPU lacks it or the structure has no such choice.
+    /// Makes a wide BVH use `simd` (tests and benchmarks compare the paths: the `kit` feature); false,
+    /// with nothing changed, when the CPU lacks it or the structure has no such choice.
+    #[cfg(feature = "kit")]
     pub fn set_simd(&mut self, simd: Isa) -> bool {
         each!(self, s => Structure::set_simd(s, simd))
     }

@@ -14,7 +14,7 @@ use rayon::prelude::*;
 
 use super::bvh2::{Bvh2, INTERSECTION_COST, TRAVERSAL_COST};
 use super::prims::{PrimKind, Prims};
-use super::wide::{EMPTY, LEAF, TRIANGLES, WideBvh, leaf_parts};
+use super::wide::{EMPTY, LEAF, WideBvh};
 use crate::geometry::aabb::Aabb;
 
 /// The most steps an exact EPO may take (a node reached is one, a triangle clipped to a box 16, about
@@ -382,24 +382,18 @@ impl<const W: usize> From<&WideBvh<'_, W>> for TreeView {
     /// around everything); a triangle leaf's ids from its four-triangle blocks.
     fn from(bvh: &WideBvh<'_, W>) -> Self {
         let mut view = TreeView::default();
-        if bvh.root == EMPTY {
+        if bvh.root() == EMPTY {
             return view;
         }
-        let mut stack = vec![(bvh.root, bvh.bounds, 0usize)];
+        let mut stack = vec![(bvh.root(), bvh.bounds(), 0usize)];
         view.nodes.push(ViewNode::default());
         while let Some((r, bounds, at)) = stack.pop() {
             view.nodes[at].bounds = bounds;
             if r & LEAF != 0 {
-                let (start, count) = leaf_parts(r);
-                view.nodes[at].prims = if r & TRIANGLES != 0 {
-                    let blocks = &bvh.tris[start..start + count.div_ceil(4)];
-                    blocks.iter().flat_map(|b| b.id).take(count).collect()
-                } else {
-                    bvh.ids[start..start + count].to_vec()
-                };
+                view.nodes[at].prims = bvh.leaf_ids(r);
                 continue;
             }
-            let n = &bvh.nodes[r as usize];
+            let n = &bvh.nodes()[r as usize];
             for k in (0..W).filter(|&k| n.child[k] != EMPTY) {
                 let slot = view.nodes.len();
                 view.nodes.push(ViewNode::default());

@@ -8,114 +8,104 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::film::Film;
-use super::kernel::TilePixels;
+use super::kernel::{Driver, Packets, Single, TilePixels};
 use super::options::Kernel;
-use super::renderer::Renderer;
+use super::setup::Setup;
 use super::stats::{Count, RayCounts, TileRays};
 use super::tiles::{self, TILE, Tile};
 use crate::accel::{Counting, Plain};
 
-impl Renderer<'_> {
-    /// Renders the frame (pass 1) on the current rayon pool.
-    pub fn render(&self) -> Film {
-        let never = AtomicBool::new(false);
-        self.render_pass(1, &|| {}, &never).expect("not stopped").0
+/// Renders pass `pass` (from 1) of the whole frame of `setup`: [`Renderer::render_pass`].
+///
+/// [`Renderer::render_pass`]: super::Renderer::render_pass
+pub(super) fn render_pass(
+    setup: &Setup,
+    pass: u32,
+    on_tile: &(dyn Fn() + Sync),
+    stop: &AtomicBool,
+) -> Option<(Film, RayCounts)> {
+    let (w, h) = setup.size();
+    let rendered = render_tiles(setup, pass, &tiles::tiles(w, h), on_tile, stop);
+    if !rendered.is_complete() {
+        return None;
     }
-
-    /// Renders pass `pass` (from 1; each pass draws its own random numbers), calling `on_tile` after
-    /// each tile (for a progress bar), and counts the rays it traced. Returns `None`, promptly and with
-    /// nothing half-done handed out, once `stop` is set.
-    pub fn render_pass(
-        &self,
-        pass: u32,
-        on_tile: &(dyn Fn() + Sync),
-        stop: &AtomicBool,
-    ) -> Option<(Film, RayCounts)> {
-        let (w, h) = (self.options.width, self.options.height);
-        let rendered = self.render_tiles(pass, &tiles::tiles(w, h), on_tile, stop);
-        if !rendered.is_complete() {
-            return None;
+    let mut film = Film::new(w, h);
+    rendered.for_each(|tile, buf| {
+        for y in tile.y0..tile.y1 {
+            let row = (y * w) as usize;
+            let src = ((y - tile.y0) * TILE) as usize;
+            let n = (tile.x1 - tile.x0) as usize;
+            film.pixels[row + tile.x0 as usize..row + tile.x0 as usize + n]
+                .copy_from_slice(&buf[src..src + n]);
         }
-        let mut film = Film::new(w, h);
-        rendered.for_each(|tile, buf| {
-            for y in tile.y0..tile.y1 {
-                let row = (y * w) as usize;
-                let src = ((y - tile.y0) * TILE) as usize;
-                let n = (tile.x1 - tile.x0) as usize;
-                film.pixels[row + tile.x0 as usize..row + tile.x0 as usize + n]
-                    .copy_from_slice(&buf[src..src + n]);
+    });
+    Some((film, rendered.rays()))
+}
+
+/// Renders pass `pass` of `setup`'s `tiles` only, in parallel: [`Renderer::render_tiles`].
+///
+/// [`Renderer::render_tiles`]: super::Renderer::render_tiles
+pub(super) fn render_tiles(
+    setup: &Setup,
+    pass: u32,
+    tiles: &[Tile],
+    on_tile: &(dyn Fn() + Sync),
+    stop: &AtomicBool,
+) -> TilePass {
+    // Each tile fills a fixed-size buffer and each kernel keeps its per-tile state (sample
+    // patterns) from tile to tile, so nothing is allocated per pixel or per ray.
+    //
+    // One job per tile (`with_max_len(1)`): tiles differ in cost by orders of magnitude (the
+    // dragon's glass and metal against empty sky), and rayon's adaptive split otherwise stops
+    // splitting after a few levels, leaving a worker folding a long run of expensive tiles that no
+    // idle worker can steal (`profiles/README.md`).
+    let tiles = tiles
+        .par_iter()
+        .with_max_len(1)
+        .map(|&tile| {
+            if stop.load(Ordering::Relaxed) {
+                return None;
             }
-        });
-        Some((film, rendered.rays()))
-    }
+            let mut buf = [Vec3::ZERO; (TILE * TILE) as usize];
+            // Each pixel's rays kept apart where the render counts steps (for heatmaps).
+            let mut rays = TileRays::new(setup.counting());
+            if setup.counting() {
+                tile_with::<Counting>(setup, tile, pass, &mut buf, &mut rays, stop);
+            } else {
+                tile_with::<Plain>(setup, tile, pass, &mut buf, &mut rays, stop);
+            }
+            // A kernel stops within its tile once `stop` is set (a tile of many samples a pixel
+            // takes long): what it left may be half done, so none of it is kept.
+            if stop.load(Ordering::Relaxed) {
+                return None;
+            }
+            on_tile();
+            Some((tile, buf, rays))
+        })
+        .collect();
+    TilePass { tiles }
+}
 
-    /// Renders pass `pass` of `tiles` only (a part of the frame), in parallel. A pixel's colour depends
-    /// only on the seed, the pixel and the pass, so any split of the tiles renders the same pixels.
-    /// `on_tile` is as for [`Renderer::render_pass`]; once `stop` is set, the tiles not yet finished
-    /// are left (a tile being rendered within a pixel or block) and the [`TilePass`] holds the ones
-    /// finished, for a caller that keeps them.
-    pub fn render_tiles(
-        &self,
-        pass: u32,
-        tiles: &[Tile],
-        on_tile: &(dyn Fn() + Sync),
-        stop: &AtomicBool,
-    ) -> TilePass {
-        // Each tile fills a fixed-size buffer and each kernel keeps its per-tile state (sample
-        // patterns) from tile to tile, so nothing is allocated per pixel or per ray.
-        //
-        // One job per tile (`with_max_len(1)`): tiles differ in cost by orders of magnitude (the
-        // dragon's glass and metal against empty sky), and rayon's adaptive split otherwise stops
-        // splitting after a few levels, leaving a worker folding a long run of expensive tiles that no
-        // idle worker can steal (`profiles/README.md`).
-        let tiles = tiles
-            .par_iter()
-            .with_max_len(1)
-            .map(|&tile| {
-                if stop.load(Ordering::Relaxed) {
-                    return None;
-                }
-                let mut buf = [Vec3::ZERO; (TILE * TILE) as usize];
-                // Each pixel's rays kept apart where the render counts steps (for heatmaps).
-                let mut rays = TileRays::new(self.counting());
-                if self.counting() {
-                    self.tile::<Counting>(tile, pass, &mut buf, &mut rays, stop);
-                } else {
-                    self.tile::<Plain>(tile, pass, &mut buf, &mut rays, stop);
-                }
-                // A kernel stops within its tile once `stop` is set (a tile of many samples a pixel
-                // takes long): what it left may be half done, so none of it is kept.
-                if stop.load(Ordering::Relaxed) {
-                    return None;
-                }
-                on_tile();
-                Some((tile, buf, rays))
-            })
-            .collect();
-        TilePass { tiles }
-    }
-
-    /// Renders `tile` for pass `pass` with the chosen kernel into `buf`, its rays counted into `rays`
-    /// (and their steps where `C` counts them).
-    fn tile<C: Count>(
-        &self,
-        tile: Tile,
-        pass: u32,
-        buf: &mut TilePixels,
-        rays: &mut TileRays,
-        stop: &AtomicBool,
-    ) {
-        match self.options.kernel {
-            Kernel::Single => self.tile_single::<C>(tile, pass, buf, rays, stop),
-            Kernel::Packet => self.tile_packets::<C>(tile, pass, buf, rays, stop),
-        }
+/// Renders `tile` for pass `pass` with the frame's kernel into `buf`, its rays counted into `rays`
+/// (and their steps where `C` counts them).
+fn tile_with<C: Count>(
+    setup: &Setup,
+    tile: Tile,
+    pass: u32,
+    buf: &mut TilePixels,
+    rays: &mut TileRays,
+    stop: &AtomicBool,
+) {
+    match setup.kernel() {
+        Kernel::Single => Single::tile::<C>(setup, tile, pass, buf, rays, stop),
+        Kernel::Packet => Packets::tile::<C>(setup, tile, pass, buf, rays, stop),
     }
 }
 
 /// A tile's pixels and the rays they took.
 type TileDone = (Tile, TilePixels, TileRays);
 
-/// A pass over some tiles as [`Renderer::render_tiles`] left it: every tile's pixels, or, if it was
+/// A pass over some tiles as [`Renderer::render_tiles`](super::Renderer::render_tiles) left it: every tile's pixels, or, if it was
 /// stopped, those of the tiles finished before the stop (so that an interrupted render can keep them).
 #[derive(Debug)]
 pub struct TilePass {

@@ -31,6 +31,7 @@ mod options;
 pub mod progressive;
 mod renderer;
 pub mod sampler;
+mod setup;
 mod shade;
 pub mod spd;
 mod stats;

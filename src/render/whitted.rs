@@ -13,7 +13,7 @@ use super::env::Background;
 use super::lanes::{Lanes, V3, each};
 use super::light::{self, LightSample, Lights};
 use super::optics::beer;
-use super::options::MAX_DEPTH;
+use super::options::{MAX_DEPTH, Options};
 use super::sampler::Sampler;
 use super::shade::{HitLanes, light};
 use super::stats::{Count, RayKind, SampleRays};
@@ -73,19 +73,12 @@ pub struct Whitted<'a> {
 }
 
 impl<'a> Whitted<'a> {
-    /// The integrator of `scene` through `accel`. With `sampled_lights`, each quad light is sampled at
-    /// one point per pixel sample (soft shadows); without, it is its regular grid of point lights (the
-    /// course's spp-0 model). Materials without a roughness of their own get `roughness`.
-    pub fn new(
-        scene: &'a Scene,
-        accel: &'a Accel<'a>,
-        background: Background,
-        sampled_lights: bool,
-        max_depth: u32,
-        roughness: f32,
-        spd: bool,
-    ) -> Self {
-        let (fixed_lights, quads) = if sampled_lights {
+    /// The integrator of `scene` through `accel` under `options`: with samples per pixel, each quad
+    /// light is sampled at one point per pixel sample (soft shadows); without, it is its regular grid
+    /// of point lights (the course's spp-0 model). Materials without a roughness of their own get
+    /// the options' roughness.
+    pub fn new(scene: &'a Scene, accel: &'a Accel<'a>, background: Background, options: &Options) -> Self {
+        let (fixed_lights, quads) = if options.side() > 0 {
             (light::point_samples(scene), &scene.area_lights[..])
         } else {
             (light::regular_samples(scene), &[][..])
@@ -100,11 +93,11 @@ impl<'a> Whitted<'a> {
             roughness: scene
                 .materials
                 .iter()
-                .map(|m| m.roughness.unwrap_or(roughness))
+                .map(|m| m.roughness.unwrap_or(options.roughness))
                 .collect(),
             // Unvalidated options are clamped rather than allowed to overflow the stack.
-            max_depth: max_depth.min(MAX_DEPTH),
-            spd,
+            max_depth: options.max_depth.min(MAX_DEPTH),
+            spd: options.spd,
         }
     }
 

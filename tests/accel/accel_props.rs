@@ -3,7 +3,7 @@
 use glam::Vec3;
 use proptest::prelude::*;
 use whitted::accel::bvh2::{Builder, Bvh2};
-use whitted::accel::wide::{EMPTY, LEAF, TRIANGLES, WideBvh, leaf_parts};
+use whitted::accel::wide::{EMPTY, LEAF, WideBvh, leaf_parts};
 use whitted::accel::{PrimKind, Prims};
 use whitted::geometry::{aabb::Aabb, cuboid, ray::safe_inverse};
 use whitted::scene::{Camera, Material, Scene};
@@ -144,30 +144,23 @@ fn wide_invariants<const W: usize>(items: &[(u8, Vec3, Vec3, f32)]) -> Result<()
     let prims = Prims::new(&s);
     let bvh = WideBvh::<W>::new(prims, 12).unwrap();
     let mut seen = vec![0; prims.bounded() as usize];
-    let mut stack = vec![(bvh.root, bvh.bounds)];
+    let mut stack = vec![(bvh.root(), bvh.bounds())];
     while let Some((r, bounds)) = stack.pop() {
         if r == EMPTY {
             continue;
         }
         if r & LEAF != 0 {
-            let (start, count) = leaf_parts(r);
-            let ids: Vec<u32> = if r & TRIANGLES != 0 {
-                bvh.tris[start..start + count.div_ceil(4)]
-                    .iter()
-                    .flat_map(|b| b.id)
-                    .filter(|&id| id != u32::MAX)
-                    .collect()
-            } else {
-                bvh.ids[start..start + count].to_vec()
-            };
+            let count = leaf_parts(r).1;
+            let ids = bvh.leaf_ids(r);
             prop_assert_eq!(ids.len(), count);
+            prop_assert!(ids.iter().all(|&id| id != u32::MAX), "{:?}", ids);
             for id in ids {
                 seen[id as usize] += 1;
                 prop_assert!(bounds.contains(&prims.bounds(id)));
             }
             continue;
         }
-        let node = &bvh.nodes[r as usize];
+        let node = &bvh.nodes()[r as usize];
         for k in 0..W {
             let child = WideBvh::<W>::child_bounds(node, k);
             if node.child[k] == EMPTY {

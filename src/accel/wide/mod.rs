@@ -97,15 +97,15 @@ pub fn leaf_parts(r: ChildRef) -> (usize, usize) {
 pub struct WideBvh<'a, const W: usize> {
     prims: Prims<'a>,
     /// Nodes in depth-first order, the root first.
-    pub nodes: Vec<Node<W>>,
+    nodes: Vec<Node<W>>,
     /// Primitive ids in leaf order (each leaf's primitives are contiguous).
-    pub ids: Vec<u32>,
+    ids: Vec<u32>,
     /// Triangle leaves' blocks, four triangles each in SoA form.
-    pub tris: Vec<tri4::Tri4>,
+    tris: Vec<tri4::Tri4>,
     /// The root reference (a node, a lone leaf, or [`EMPTY`] for a scene without bounded primitives).
-    pub root: ChildRef,
+    root: ChildRef,
     /// The box around everything.
-    pub bounds: Aabb,
+    bounds: Aabb,
     /// The kernels' instruction set, chosen at build time from the CPU.
     simd: Simd,
 }
@@ -203,6 +203,32 @@ impl<'a, const W: usize> WideBvh<'a, W> {
         }
         #[cfg(not(target_arch = "x86_64"))]
         let _ = r;
+    }
+
+    /// The root reference (a node, a lone leaf, or [`EMPTY`] for a scene without bounded primitives).
+    pub fn root(&self) -> ChildRef {
+        self.root
+    }
+
+    /// The box around everything.
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// The nodes in depth-first order, the root first.
+    pub fn nodes(&self) -> &[Node<W>] {
+        &self.nodes
+    }
+
+    /// The primitive ids of the leaf `r` (a [`LEAF`] reference), in leaf order.
+    pub fn leaf_ids(&self, r: ChildRef) -> Vec<u32> {
+        let (start, count) = leaf_parts(r);
+        if r & TRIANGLES != 0 {
+            let blocks = &self.tris[start..start + count.div_ceil(4)];
+            blocks.iter().flat_map(|b| b.id).take(count).collect()
+        } else {
+            self.ids[start..start + count].to_vec()
+        }
     }
 
     /// The box of child slot `k` of node `n`.

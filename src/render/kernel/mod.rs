@@ -8,10 +8,34 @@
 mod packet;
 mod single;
 
+use std::sync::atomic::AtomicBool;
+
 use glam::Vec3;
 
-use super::tiles::TILE;
+use super::setup::Setup;
+use super::stats::{Count, TileRays};
+use super::tiles::{TILE, Tile};
 use crate::accel::PACKET;
+
+/// A kernel: how a tile's pixel samples are traced and shaded.
+pub(super) trait Driver {
+    /// Shades `tile` of `setup`'s frame for pass `pass` into `buf`, counting its rays into `rays`
+    /// (and their steps where `C` counts them); leaves the tile half done once `stop` is set.
+    fn tile<C: Count>(
+        setup: &Setup,
+        tile: Tile,
+        pass: u32,
+        buf: &mut TilePixels,
+        rays: &mut TileRays,
+        stop: &AtomicBool,
+    );
+}
+
+/// One pixel sample's ray at a time (`single.rs`).
+pub(super) struct Single;
+
+/// The camera rays of 4x2 pixels as a packet of eight (`packet.rs`).
+pub(super) struct Packets;
 
 /// A tile's pixels, row-major at a stride of [`TILE`].
 pub(super) type TilePixels = [Vec3; (TILE * TILE) as usize];

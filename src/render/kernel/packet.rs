@@ -14,76 +14,32 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use glam::{Vec2, Vec3};
 
-use super::{BLOCK_H, BLOCK_W, PerRay, TilePixels};
+use super::{BLOCK_H, BLOCK_W, Driver, Packets, PerRay, TilePixels};
 use crate::accel::lanes::{Lanes8, OnLanes8};
 use crate::accel::packet::PACKET;
 use crate::geometry::ray::Ray;
 use crate::render::lanes::{Fx, V3, each};
-use crate::render::renderer::Renderer;
 use crate::render::sampler::PixelPattern;
+use crate::render::setup::Setup;
 use crate::render::stats::{Count, RayKind, TileRays};
 use crate::render::tiles::{TILE, Tile};
 use crate::render::whitted::PixelSample;
 
-impl Renderer<'_> {
-    /// Sample `s` of the pixels of a packet's `active` lanes (lane `k` at `pixel(k)`, its pattern
-    /// `patterns[k]`): their camera rays, a pinhole's eight at once ([`RayCamera::rays`]), and what
-    /// each carries, written in place into the block's `rays` and `samples`.
-    ///
-    /// [`RayCamera::rays`]: crate::render::camera::RayCamera::rays
-    // Not inlined: a phase of `profiles/frame.sh`, called once a packet (its body on the frame's
-    // lanes, `Lanes::call`).
-    #[inline(never)]
-    fn camera_packet<'s, C: Count, L: Lanes8>(
-        &'s self,
-        pixel: impl Fn(usize) -> (u32, u32),
-        active: u32,
-        pass: u32,
-        s: u32,
-        patterns: &PerRay<PixelPattern>,
-        (rays, samples): (&mut PerRay<Ray>, &mut PerRay<PixelSample<'s, C>>),
-    ) {
-        L::call(
-            #[inline(always)]
-            || {
-                let mut at = [Vec2::ZERO; PACKET];
-                let mut lens = [None; PACKET];
-                for (k, sample) in samples.iter_mut().enumerate() {
-                    *sample = if active >> k & 1 == 0 {
-                        self.pixel_sample(pass, self.pixel_key(0, 0), 0, Vec2::ZERO)
-                    } else {
-                        let (x, y) = pixel(k);
-                        let (point, lens_point, sample) = self.sample_start(x, y, pass, s, &patterns[k]);
-                        (at[k], lens[k]) = (point, lens_point);
-                        sample
-                    };
-                }
-                let camera = self.camera();
-                *rays = camera.rays::<L, PACKET>(at.map(|p| p.x), at.map(|p| p.y));
-                for k in each::<PACKET>(active) {
-                    if let Some(lens) = lens[k] {
-                        rays[k] = camera.lens_ray(at[k].x, at[k].y, lens);
-                    }
-                }
-            },
-        )
-    }
-
-    /// Shades `tile` for pass `pass`, packet by packet (pixels outside the image are inactive lanes),
-    /// into `buf`: sample `s` of eight pixels at a time, each lane with its pixel's own pattern and
-    /// random numbers, summed per pixel in sample order as the single-ray path sums them, the rays
-    /// counted into `rays`. Leaves the tile half done once `stop` is set. The whole tile, camera rays
-    /// to film, runs on the lanes of the instruction set chosen for the frame.
-    pub(in crate::render) fn tile_packets<C: Count>(
-        &self,
+/// Each tile, packet by packet (pixels outside the image are inactive lanes): sample `s` of eight
+/// pixels at a time, each lane with its pixel's own pattern and random numbers, summed per pixel in
+/// sample order as the single-ray kernel sums them. The whole tile, camera rays to film, runs on the
+/// lanes of the instruction set chosen for the frame.
+impl Driver for Packets {
+    fn tile<C: Count>(
+        setup: &Setup,
         tile: Tile,
         pass: u32,
         buf: &mut TilePixels,
         rays: &mut TileRays,
         stop: &AtomicBool,
     ) {
-        self.simd().run8(TilePackets::<C> {
-            renderer: self,
+        setup.simd().run8(TilePackets::<C> {
+            setup,
             tile,
             pass,
             buf,
@@ -94,9 +50,9 @@ impl Renderer<'_> {
     }
 }
 
-/// [`Renderer::tile_packets`]' work, for `Simd::run8` to run on the lanes it chose.
+/// A tile's work for [`Packets`], for `Simd::run8` to run on the lanes it chose.
 struct TilePackets<'r, 'a, C> {
-    renderer: &'r Renderer<'a>,
+    setup: &'r Setup<'a>,
     tile: Tile,
     pass: u32,
     buf: &'r mut TilePixels,
@@ -111,7 +67,7 @@ impl<C: Count> OnLanes8 for TilePackets<'_, '_, C> {
     #[inline(always)]
     fn run<L: Lanes8>(self) {
         let TilePackets {
-            renderer: r,
+            setup: r,
             tile,
             pass,
             buf,
@@ -144,7 +100,7 @@ impl<C: Count> OnLanes8 for TilePackets<'_, '_, C> {
                 }
                 let mut sums = V3::<L, PACKET>::zero();
                 for s in 0..r.samples() {
-                    r.camera_packet::<C, L>(pixel, active, pass, s, &patterns, (&mut rays, &mut samples));
+                    camera_packet::<C, L>(r, pixel, active, pass, s, &patterns, (&mut rays, &mut samples));
                     let colors = r.whitted.trace_lanes::<C, L, PACKET>(
                         &rays,
                         active,
@@ -164,4 +120,47 @@ impl<C: Count> OnLanes8 for TilePackets<'_, '_, C> {
             }
         }
     }
+}
+
+/// Sample `s` of the pixels of a packet's `active` lanes (lane `k` at `pixel(k)`, its pattern
+/// `patterns[k]`): their camera rays, a pinhole's eight at once ([`RayCamera::rays`]), and what
+/// each carries, written in place into the block's `rays` and `samples`.
+///
+/// [`RayCamera::rays`]: crate::render::camera::RayCamera::rays
+// Not inlined: a phase of `profiles/frame.sh`, called once a packet (its body on the frame's
+// lanes, `Lanes::call`).
+#[inline(never)]
+fn camera_packet<'s, C: Count, L: Lanes8>(
+    setup: &'s Setup,
+    pixel: impl Fn(usize) -> (u32, u32),
+    active: u32,
+    pass: u32,
+    s: u32,
+    patterns: &PerRay<PixelPattern>,
+    (rays, samples): (&mut PerRay<Ray>, &mut PerRay<PixelSample<'s, C>>),
+) {
+    L::call(
+        #[inline(always)]
+        || {
+            let mut at = [Vec2::ZERO; PACKET];
+            let mut lens = [None; PACKET];
+            for (k, sample) in samples.iter_mut().enumerate() {
+                *sample = if active >> k & 1 == 0 {
+                    setup.pixel_sample(pass, setup.pixel_key(0, 0), 0, Vec2::ZERO)
+                } else {
+                    let (x, y) = pixel(k);
+                    let (point, lens_point, sample) = setup.sample_start(x, y, pass, s, &patterns[k]);
+                    (at[k], lens[k]) = (point, lens_point);
+                    sample
+                };
+            }
+            let camera = setup.camera();
+            *rays = camera.rays::<L, PACKET>(at.map(|p| p.x), at.map(|p| p.y));
+            for k in each::<PACKET>(active) {
+                if let Some(lens) = lens[k] {
+                    rays[k] = camera.lens_ray(at[k].x, at[k].y, lens);
+                }
+            }
+        },
+    )
 }
