@@ -4,7 +4,7 @@
 //! [`scene::ply`], [`scene::obj`]) into a structure-of-arrays [`scene::Scene`]; an accelerator
 //! ([`accel::Accel`]) is built over its primitives; the [`render::Renderer`] traces camera rays tile by
 //! tile on rayon and shades them with Whitted's model (Whitted 1980) into a linear
-//! [`render::film::Film`], written as an 8-bit PNG (or EXR) at the end.
+//! [`image::Film`], written as an 8-bit PNG (or EXR) at the end.
 //!
 //! The layout of the crate, folder by folder, and the path of a ray from the camera to the film are
 //! described once, in `docs/architecture.md`.
@@ -43,6 +43,8 @@ pub mod digest;
 pub mod error;
 pub mod files;
 pub mod geometry;
+pub mod heatmap;
+pub mod image;
 #[cfg(feature = "kit")]
 pub mod kit;
 pub mod machine;

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use whitted::files::{check_writable, takes_new_files};
-use whitted::render::film::ImageFormat;
+use whitted::image::film::ImageFormat;
 
 /// Checks that `path` names an image format (or, with `partial`, takes a `.partial` file) and can be
 /// written as the render will write it ([`check_writable`]).

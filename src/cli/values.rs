@@ -61,8 +61,8 @@ pub fn whole(s: &str) -> Result<u64, String> {
 }
 
 /// An image format named by `--output-format`.
-pub fn image_format(s: &str) -> Result<whitted::render::film::ImageFormat, String> {
-    whitted::render::film::ImageFormat::of(std::path::Path::new(&format!("x.{s}")))
+pub fn image_format(s: &str) -> Result<whitted::image::film::ImageFormat, String> {
+    whitted::image::film::ImageFormat::of(std::path::Path::new(&format!("x.{s}")))
         .map_err(|_| format!("expected png, ppm, jpg, jpeg or exr, found \"{s}\""))
 }
 

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use super::partial::{Part, PartSettings};
 use crate::error::{Error, Result};
-use crate::render::film::Film;
+use crate::image::film::Film;
 use crate::render::memory;
 use crate::render::progressive::mean;
 use crate::render::tiles::{self, Tile};

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use crate::error::{Error, Result};
-use crate::render::codecs::Decoder;
+use crate::image::codecs::Decoder;
 use crate::scene::Scene;
 
 /// The six faces, in the order of the files `DIR/{right,left,top,bottom,front,back}.jpg`: +x, −x, +y, −y,
@@ -301,7 +301,7 @@ mod tests {
         writer.finish().unwrap();
         assert_eq!(face("p.png"), [40, 50, 60, 10, 20, 30]);
         let jpeg = d.join("j.png");
-        crate::render::codecs::write_jpeg(
+        crate::image::codecs::write_jpeg(
             &mut File::create(&jpeg).unwrap(),
             8,
             8,

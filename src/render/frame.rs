@@ -7,13 +7,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::film::Film;
 use super::kernel::{Driver, Packets, Single, TilePixels};
 use super::options::Kernel;
 use super::setup::Setup;
 use super::stats::{Count, RayCounts, TileRays};
 use super::tiles::{self, TILE, Tile};
 use crate::accel::{Counting, Plain};
+use crate::image::Film;
 
 /// Renders pass `pass` (from 1) of the whole frame of `setup`: [`Renderer::render_pass`].
 ///

@@ -12,16 +12,12 @@
 //!   refracted rays ([`optics`]); a ray that leaves the scene sees the background
 //!   ([`env`](mod@env)). The single-ray kernel runs it on one lane, [`Kernel::Packet`] on eight
 //!   neighbouring pixels' rays;
-//! - the colours land in a linear [`film::Film`], or in a [`progressive::Progressive`] sum of passes,
+//! - the colours land in a linear [`crate::image::Film`], or in a [`progressive::Progressive`] sum of passes,
 //!   written as an image at the end (or as a `.partial` part of a frame, [`crate::parts`]).
 
 pub mod camera;
-mod codecs;
-pub mod cost;
 pub mod env;
-pub mod film;
 pub mod frame;
-pub mod heatmap;
 mod kernel;
 mod lanes;
 pub mod light;

@@ -15,10 +15,10 @@ use std::sync::atomic::AtomicBool;
 use glam::Vec3;
 
 use super::Renderer;
-use super::film::Film;
 use super::frame::TilePass;
 use super::stats::RayCounts;
 use super::tiles::{self, TILE, Tile};
+use crate::image::Film;
 
 /// Per-pixel sums of the passes so far over a set of tiles.
 #[derive(Clone, Debug)]

@@ -5,13 +5,13 @@
 use std::sync::atomic::AtomicBool;
 
 use super::env::Background;
-use super::film::Film;
 use super::frame::{self, TilePass};
 use super::options::Options;
 use super::setup::Setup;
 use super::stats::RayCounts;
 use super::tiles::Tile;
 use crate::accel::Accel;
+use crate::image::Film;
 use crate::scene::{Camera, Scene};
 
 /// A frame: its set-up, made once per frame and shared read-only by the workers.

@@ -16,9 +16,9 @@
 //! With these rules the seven databases at their default sizes (`scenes/spd/*_default.nff[.gz]`) come
 //! within 1% of the Readme's counts, but for gears' refraction rays (3% fewer; `docs/performance.md`).
 
-use super::film::Film;
 use super::options::Options;
 use super::stats::RayCounts;
+use crate::image::Film;
 use crate::scene::Scene;
 
 /// Image side of the procedure.

@@ -25,11 +25,11 @@ use glam::Vec3;
 use rayon::ThreadPool;
 
 use crate::accel::{Accel, AccelKind, Prims};
+use crate::heatmap::Scale;
+use crate::heatmap::cost::CostKind;
+use crate::image::film::{Film, to_u8};
 use crate::render::RayCounts;
-use crate::render::cost::CostKind;
 use crate::render::env::Background;
-use crate::render::film::{Film, to_u8};
-use crate::render::heatmap::Scale;
 use crate::render::progressive::Progressive;
 use crate::render::{Options, Renderer};
 use crate::scene::Scene;
@@ -230,7 +230,7 @@ mod tests {
     use std::sync::mpsc;
 
     use super::*;
-    use crate::render::cost::Measure;
+    use crate::heatmap::cost::Measure;
     use crate::render::{DEFAULT_DEPTH, Kernel};
     use state::{Input, Job, Key, Settings, ViewState};
 

@@ -6,7 +6,7 @@
 use glam::{Quat, Vec3};
 
 use crate::accel::AccelKind;
-use crate::render::cost::Measure;
+use crate::heatmap::cost::Measure;
 use crate::render::{Kernel, Options};
 use crate::scene::{Camera, Scene};
 

@@ -31,7 +31,7 @@ use super::state::{Input, Job, Key, Settings, ViewState};
 use super::{Config, Frame, Signals, render_loop, reproduce};
 use crate::accel::AccelKind;
 use crate::error::{Error, Result};
-use crate::render::cost::Measure;
+use crate::heatmap::cost::Measure;
 use crate::scene::Scene;
 
 /// How often the camera moves while keys are held: the screen's usual rate. Also the longest the event

@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use serde_json::Value;
-use whitted::render::heatmap::{Heatmap, Ramp, Scale, nearest_rank, viridis};
+use whitted::heatmap::{Heatmap, Ramp, Scale, nearest_rank, viridis};
 
 use crate::common::images::rgb;
 use crate::common::{self, fails, json, stdout};

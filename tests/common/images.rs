@@ -1,6 +1,6 @@
 //! Image files read back by decoders apart from the writers under test: PNG through the `png` crate,
 //! JPEG through `zune-jpeg`, binary PPM by its Netpbm header, OpenEXR through the `exr` crate. Shared by
-//! the integration tests (as `common::images`) and the library's unit tests (`render/codecs.rs`).
+//! the integration tests (as `common::images`) and the library's unit tests (`image/codecs.rs`).
 
 use std::path::Path;
 

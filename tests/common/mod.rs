@@ -9,7 +9,7 @@ use glam::DVec3;
 use serde_json::Value;
 use whitted::scene::Material;
 
-// The image readers, shared with the library's unit tests (`render/codecs.rs`).
+// The image readers, shared with the library's unit tests (`image/codecs.rs`).
 pub mod images;
 
 /// The crate root.

@@ -7,9 +7,9 @@ use clap::Args;
 use crate::cli::frame::{BuildKind, CameraArgs, FrameArgs, spd_refuses, spp};
 use crate::cli::report::Format;
 use crate::cli::values::{non_negative, positive, whole};
-use whitted::render::cost::CostKind;
-use whitted::render::film::ImageFormat;
-use whitted::render::heatmap::Scale;
+use whitted::heatmap::Scale;
+use whitted::heatmap::cost::CostKind;
+use whitted::image::film::ImageFormat;
 
 /// Arguments of `whitted render`.
 #[derive(Args)]

@@ -7,10 +7,10 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use whitted::accel::{AccelKind, BuildOptions};
+use whitted::heatmap::Scale;
+use whitted::heatmap::cost::CostKind;
+use whitted::image::film::ImageFormat;
 use whitted::parts::partial::PartSettings;
-use whitted::render::cost::CostKind;
-use whitted::render::film::ImageFormat;
-use whitted::render::heatmap::Scale;
 use whitted::render::progressive::Progressive;
 use whitted::render::{Options, tiles};
 use whitted::scene::Scene;

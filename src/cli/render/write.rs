@@ -3,10 +3,10 @@
 use std::path::{Path, PathBuf};
 
 use whitted::files::{check_writable, write_atomically};
+use whitted::heatmap::Scale;
+use whitted::heatmap::cost::CostKind;
+use whitted::image::film::Film;
 use whitted::parts::partial::{Part, PartSettings};
-use whitted::render::cost::CostKind;
-use whitted::render::film::Film;
-use whitted::render::heatmap::Scale;
 use whitted::render::progressive::Progressive;
 use whitted::render::{Options, spd};
 

@@ -5,9 +5,9 @@ use std::path::Path;
 
 use glam::Vec3;
 
+use super::codecs;
 use crate::error::{Error, Result};
 use crate::files::write_atomically;
-use crate::render::codecs;
 
 /// A width × height image of linear RGB.
 #[derive(Clone, Debug, PartialEq)]
@@ -192,7 +192,7 @@ impl ImageFormat {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::codecs::read_back;
+    use crate::image::codecs::read_back;
 
     #[test]
     fn eight_bit_conversion() {

@@ -19,8 +19,10 @@ use std::str::FromStr;
 
 use glam::Vec3;
 
+pub mod cost;
+
 use crate::error::{Error, Result};
-use crate::render::film::{Film, ImageFormat, write_png_rgb8};
+use crate::image::film::{Film, ImageFormat, write_png_rgb8};
 
 /// Viridis at `t` (0 the bottom of the map, 1 the top; clamped, NaN is 0), as sRGB bytes.
 pub fn viridis(t: f32) -> [u8; 3] {
@@ -452,7 +454,7 @@ fn format_label(v: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::codecs::read_back;
+    use crate::image::codecs::read_back;
 
     /// matplotlib's published viridis table (`_viridis_data`, van der Walt and Smith 2015): entries 0
     /// and 255, and the mean of entries 127 and 128 (0.5 lies between them), as 0..1 sRGB values.

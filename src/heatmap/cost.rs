@@ -6,8 +6,8 @@ use std::str::FromStr;
 
 use serde_json::{Map, Value, json};
 
-use super::heatmap::{Heatmap, Ramp, Scale, nearest_rank};
-use super::stats::{RayCounts, RayKind};
+use super::{Heatmap, Ramp, Scale, nearest_rank};
+use crate::render::{RayCounts, RayKind};
 
 /// A per-pixel count of a heatmap.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
