@@ -4,7 +4,8 @@
 
 use super::tiles::TILE;
 use crate::accel::counters::{self, Steps};
-use crate::accel::{Counting, Plain, Tally};
+use crate::accel::lanes::OnLanes8;
+use crate::accel::{Counting, Plain, Simd, Tally};
 
 /// What a render counts beyond its rays by kind: nothing ([`Plain`]) or each ray's steps
 /// ([`Counting`]), through the accelerator's verbs of the same tally.
@@ -15,6 +16,10 @@ pub(crate) trait Count: Tally {
     fn charge(steps: &mut Self::Steps, kind: RayKind, k: usize);
     /// `steps` by kind (none in a plain render).
     fn kinds(steps: &Self::Steps) -> KindSteps;
+    /// Runs the packet kernel's tile work `k` on the lanes of `simd`: a plain frame's choice; a
+    /// counting frame (a diagnostic, slow by its counting) shades on the portable lanes, which give
+    /// the same bits, so that the build holds one counting instance of the shading, not three.
+    fn run_tile<K: OnLanes8>(simd: Simd, k: K) -> K::Output;
 }
 
 impl Count for Plain {
@@ -24,6 +29,10 @@ impl Count for Plain {
     #[inline(always)]
     fn kinds(_: &()) -> KindSteps {
         KindSteps::default()
+    }
+    #[inline(always)]
+    fn run_tile<K: OnLanes8>(simd: Simd, k: K) -> K::Output {
+        simd.run8(k)
     }
 }
 
@@ -36,6 +45,10 @@ impl Count for Counting {
     #[inline]
     fn kinds(steps: &KindSteps) -> KindSteps {
         *steps
+    }
+    #[inline(always)]
+    fn run_tile<K: OnLanes8>(_: Simd, k: K) -> K::Output {
+        Simd::run8_portable(k)
     }
 }
 

@@ -97,6 +97,13 @@ impl Simd {
         }
     }
 
+    /// Runs `k` on `wide`'s portable eight lanes, whatever the CPU: for work whose speed matters
+    /// less than the code its other instances would add to the build.
+    #[inline(always)]
+    pub fn run8_portable<K: OnLanes8>(k: K) -> K::Output {
+        k.run::<f32x8>()
+    }
+
     /// Runs `k` on eight-lane vectors of this instruction set: the one run-time dispatch of the
     /// kernels.
     #[inline(always)]
@@ -108,7 +115,7 @@ impl Simd {
             Simd::Avx2(_) => unsafe { run_avx2(k) },
             #[cfg(target_arch = "x86_64")]
             Simd::Avx512(_) => unsafe { run_avx512(k) },
-            Simd::Portable => k.run::<f32x8>(),
+            Simd::Portable => Simd::run8_portable(k),
         }
     }
 }

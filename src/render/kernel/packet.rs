@@ -38,15 +38,18 @@ impl Driver for Packets {
         rays: &mut TileRays,
         stop: &AtomicBool,
     ) {
-        setup.simd().run8(TilePackets::<C> {
-            setup,
-            tile,
-            pass,
-            buf,
-            rays,
-            stop,
-            count: PhantomData,
-        });
+        C::run_tile(
+            setup.simd(),
+            TilePackets::<C> {
+                setup,
+                tile,
+                pass,
+                buf,
+                rays,
+                stop,
+                count: PhantomData,
+            },
+        );
     }
 }
 
