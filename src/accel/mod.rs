@@ -6,19 +6,19 @@
 //! ray. That shared interface is what lets every structure be checked against brute force with one
 //! loop, and lets the renderer send packets without knowing which structure answers them.
 
-pub mod brute;
+pub(crate) mod brute;
 pub mod bvh2;
 pub mod counters;
 #[cfg(feature = "embree")]
 pub mod embree;
-pub mod grid;
-pub mod packet;
-pub mod pages;
+pub(crate) mod grid;
+pub(crate) mod packet;
+pub(crate) mod pages;
 pub mod policy;
-pub mod prims;
+pub(crate) mod prims;
 pub mod quality;
 pub mod stack;
-pub mod structure;
+pub(crate) mod structure;
 pub mod wide;
 
 use std::marker::PhantomData;

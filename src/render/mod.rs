@@ -1,7 +1,7 @@
 //! Rendering: camera rays per tile, traced and shaded in parallel, into a linear film.
 //!
 //! Where a ray goes, from the camera to the film:
-//! - [`frame`] schedules the image's [`tiles`] on rayon; per pixel, the [`Renderer`] draws the
+//! - `frame.rs` schedules the image's [`tiles`] on rayon; per pixel, the [`Renderer`] draws the
 //!   samples ([`sampler`]: jittered positions, lens points, light points, random numbers) and makes
 //!   their camera rays ([`camera`]); a kernel (`kernel/`: single rays or packets, [`Kernel`])
 //!   traces and shades them;
@@ -17,7 +17,7 @@
 
 pub mod camera;
 pub mod env;
-pub mod frame;
+pub(crate) mod frame;
 mod kernel;
 mod lanes;
 pub mod light;
@@ -34,6 +34,7 @@ mod stats;
 pub mod tiles;
 mod whitted;
 
+pub use frame::TilePass;
 pub use options::{DEFAULT_DEPTH, Kernel, MAX_DEPTH, MAX_SPP, Options};
 pub use renderer::Renderer;
 pub use shade::EPSILON;
