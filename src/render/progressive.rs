@@ -17,7 +17,7 @@ use glam::Vec3;
 use super::Renderer;
 use super::frame::TilePass;
 use super::stats::RayCounts;
-use super::tiles::{self, TILE, Tile};
+use super::tiles::{self, Tile};
 use crate::image::Film;
 
 /// Per-pixel sums of the passes so far over a set of tiles.
@@ -109,7 +109,7 @@ impl Progressive {
             }
             for y in tile.y0..tile.y1 {
                 for x in tile.x0..tile.x1 {
-                    let r = rays[((y - tile.y0) * TILE + (x - tile.x0)) as usize];
+                    let r = rays[tile.index(x, y)];
                     self.pixel_rays[y as usize * w + x as usize] += r;
                 }
             }

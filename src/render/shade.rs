@@ -14,7 +14,7 @@ use glam::Vec3;
 use super::lanes::{Fx, Gather, Lanes, V3, each, full};
 use super::light::Lights;
 use super::optics::{reflect_lanes, refract_lanes, schlick_lanes};
-use crate::accel::{Hit, PrimKind, Prims, Surface};
+use crate::accel::{Hit, PrimKind, Prims};
 use crate::geometry::ray::Ray;
 use crate::scene::{Material, MaterialId, NO_NORMALS, Scene};
 
@@ -32,7 +32,7 @@ pub(super) struct HitLanes<L, const N: usize> {
     /// Each lane's material (a dead lane holds a live lane's).
     ids: [MaterialId; N],
     m: Materials<L, N>,
-    /// The lanes whose ray hit the back of its surface ([`Surface::inside`]).
+    /// The lanes whose ray hit the back of its surface ([`crate::accel::Surface::inside`]).
     inside: u32,
     /// The lanes that hold a hit.
     live: u32,
@@ -180,17 +180,16 @@ impl<L: Lanes<N>, const N: usize> HitLanes<L, N> {
         }
     }
 
-    /// Lane `k`'s surface.
+    /// Lane `k`'s material.
     #[inline(always)]
-    pub fn surface(&self, k: usize) -> Surface {
-        Surface {
-            t: self.t.to_array()[k],
-            point: self.p.lanes()[k],
-            geometric: self.ng.lanes()[k],
-            shading: self.ns.lanes()[k],
-            material: self.ids[k],
-            inside: self.inside >> k & 1 == 1,
-        }
+    pub fn material(&self, k: usize) -> MaterialId {
+        self.ids[k]
+    }
+
+    /// The distances along the rays to their hits.
+    #[inline(always)]
+    pub fn distances(&self) -> [f32; N] {
+        self.t.to_array()
     }
 
     /// The refracted (0) and reflected (1) rays of the hits in `lanes`, from just off each surface

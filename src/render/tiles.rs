@@ -18,6 +18,14 @@ pub struct Tile {
 /// 512 × 512 frame, large enough that scheduling costs nothing.
 pub const TILE: u32 = 16;
 
+impl Tile {
+    /// Where pixel `(x, y)` of the tile lies in a tile's buffer (row-major, [`TILE`] a row).
+    #[inline]
+    pub fn index(&self, x: u32, y: u32) -> usize {
+        ((y - self.y0) * TILE + (x - self.x0)) as usize
+    }
+}
+
 /// The tiles of a `width` × `height` image in row-major order (edge tiles are cut to the image).
 pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
     let mut out = Vec::with_capacity((width.div_ceil(TILE) * height.div_ceil(TILE)) as usize);

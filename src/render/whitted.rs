@@ -271,7 +271,7 @@ impl<'a> Whitted<'a> {
         let rough = h.materials_where(|m| self.roughness[m as usize] > 0.0);
         let [mut refracted, mut reflected] =
             h.bounces(self.scene, h.live(), self.spd, rough, |k, mirror, ng| {
-                let roughness = self.roughness[h.surface(k).material as usize];
+                let roughness = self.roughness[h.material(k) as usize];
                 fuzz(mirror, ng, roughness, &mut samples[k].rng)
             });
         let both = refracted.lanes & reflected.lanes;
@@ -297,10 +297,9 @@ impl<'a> Whitted<'a> {
         if inside == 0 {
             return color;
         }
-        let mut lanes = color.lanes();
+        let (mut lanes, t) = (color.lanes(), h.distances());
         for k in each::<N>(inside) {
-            let s = h.surface(k);
-            lanes[k] *= beer(self.scene.materials[s.material as usize].diffuse, s.t);
+            lanes[k] *= beer(self.scene.materials[h.material(k) as usize].diffuse, t[k]);
         }
         V3::from_lanes(&lanes)
     }

@@ -22,7 +22,7 @@ use crate::render::lanes::{Fx, V3, each};
 use crate::render::sampler::PixelPattern;
 use crate::render::setup::Setup;
 use crate::render::stats::{Count, RayKind, TileRays};
-use crate::render::tiles::{TILE, Tile};
+use crate::render::tiles::Tile;
 use crate::render::whitted::PixelSample;
 
 /// Each tile, packet by packet (pixels outside the image are inactive lanes): sample `s` of eight
@@ -91,7 +91,7 @@ impl<C: Count> OnLanes8 for TilePackets<'_, '_, C> {
                 let pixel = |k: usize| (x0 + k as u32 % BLOCK_W, y0 + k as u32 / BLOCK_W);
                 let index = |k: usize| {
                     let (x, y) = pixel(k);
-                    ((y - tile.y0) * TILE + (x - tile.x0)) as usize
+                    tile.index(x, y)
                 };
                 let mut active = 0u32;
                 for (k, pattern) in patterns.iter_mut().enumerate() {

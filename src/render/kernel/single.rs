@@ -11,7 +11,7 @@ use crate::accel::Plain;
 use crate::render::sampler::PixelPattern;
 use crate::render::setup::Setup;
 use crate::render::stats::{Count, RayKind, TileRays};
-use crate::render::tiles::{TILE, Tile};
+use crate::render::tiles::Tile;
 use crate::render::whitted::PixelSample;
 
 impl Driver for Single {
@@ -29,7 +29,7 @@ impl Driver for Single {
                 if stop.load(Ordering::Relaxed) {
                     return;
                 }
-                let i = ((y - tile.y0) * TILE + (x - tile.x0)) as usize;
+                let i = tile.index(x, y);
                 buf[i] = Single::pixel_in_pass::<C>(setup, x, y, pass, &mut pattern, |sample| {
                     rays.add::<C>(i, &sample.rays, &sample.steps)
                 });
