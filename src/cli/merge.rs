@@ -6,7 +6,9 @@ use std::path::PathBuf;
 use clap::Args;
 use whitted::parts;
 
-use super::{Failure, outputs};
+use whitted::files;
+
+use super::Failure;
 
 /// Arguments of `whitted merge`.
 #[derive(Args)]
@@ -27,8 +29,8 @@ pub struct MergeArgs {
 /// Checks the output, then checks and merges the parts and writes the image (nothing is written if
 /// any check fails).
 pub fn run(args: &MergeArgs) -> Result<(), Failure> {
-    outputs::check(&args.output, false)?;
-    if let Some(part) = args.parts.iter().find(|p| outputs::same_file(&args.output, p)) {
+    files::check(&args.output, false)?;
+    if let Some(part) = args.parts.iter().find(|p| files::same_file(&args.output, p)) {
         return Err(Failure::Usage(whitted::Error::file(
             &args.output,
             format!(

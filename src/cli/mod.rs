@@ -15,7 +15,6 @@ mod frame;
 mod info;
 mod man;
 mod merge;
-mod outputs;
 mod render;
 mod report;
 mod setup;

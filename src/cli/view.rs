@@ -8,8 +8,8 @@ use whitted::view::{self, Config, MAX_WINDOW, state::MAX_VIEW_DEPTH};
 
 use super::Failure;
 use super::frame::{DEFAULT_DEPTH, FrameArgs};
-use super::outputs;
 use super::setup::{load_scene, thread_pool, warn};
+use whitted::files;
 
 /// Arguments of `whitted view`.
 #[derive(Args)]
@@ -49,7 +49,7 @@ pub struct ViewArgs {
 /// Opens the window.
 pub fn run(args: &ViewArgs) -> Result<(), Failure> {
     if let Some(path) = &args.screenshot {
-        outputs::check(path, false)?;
+        files::check(path, false)?;
     }
     let scene = load_scene(args.scene.as_deref(), args.format)?;
     warn(&scene.warnings);

@@ -14,6 +14,7 @@ use glam::Vec3;
 use super::lanes::{Fx, Gather, Lanes, V3, each, full};
 use super::light::Lights;
 use super::optics::{reflect_lanes, refract_lanes, schlick_lanes};
+use super::spd::Spawning;
 use crate::accel::{Hit, PrimKind, Prims};
 use crate::geometry::ray::Ray;
 use crate::scene::{Material, MaterialId, NO_NORMALS, Scene};
@@ -194,16 +195,14 @@ impl<L: Lanes<N>, const N: usize> HitLanes<L, N> {
 
     /// The refracted (0) and reflected (1) rays of the hits in `lanes`, from just off each surface
     /// on the side each leaves to, with their weights: Snell's refraction and Schlick's Fresnel split
-    /// for transmitters, Ks for the mirror, under the SPD's rules with `spd` (a transmitter always
-    /// spawns its mirror ray, of weight zero where Ks is 0, and its refracted ray but under a total
-    /// internal reflection; the light that finds no way out is all reflected, whatever Ks says). The
-    /// mirror direction of the lanes of `rough` is `perturb(k, mirror, geometric normal)`'s.
+    /// for transmitters, Ks for the mirror, those kept as `spawning` rules. The mirror direction of
+    /// the lanes of `rough` is `perturb(k, mirror, geometric normal)`'s.
     #[inline(always)]
     pub fn bounces(
         &self,
         scene: &Scene,
         lanes: u32,
-        spd: bool,
+        spawning: Spawning,
         rough: u32,
         mut perturb: impl FnMut(usize, Vec3, Vec3) -> Vec3,
     ) -> [Spawned<L, N>; 2] {
@@ -234,7 +233,7 @@ impl<L: Lanes<N>, const N: usize> HitLanes<L, N> {
             total = glass & all_reflected;
             kr = Fx::blend(glass & !total, fresnel, one);
             let weight = transmission * (one - kr);
-            let kept = if spd { full::<N>() } else { weight.positive() };
+            let kept = spawning.refracted(weight);
             refracted = Spawned {
                 lanes: glass & !total & kept,
                 origin: self.p - self.ng * eps,
@@ -242,12 +241,7 @@ impl<L: Lanes<N>, const N: usize> HitLanes<L, N> {
                 weight,
             };
         }
-        let weight = if spd {
-            Fx::blend(total, m.ks + transmission, m.ks * kr)
-        } else {
-            m.ks * kr
-        };
-        let kept = weight.positive() | if spd { m.transmits } else { 0 };
+        let (weight, kept) = spawning.reflected(m.ks, kr, transmission, total, m.transmits);
         let mut dir = reflect_lanes(d, self.ns).normalize();
         let rough = rough & lanes & kept;
         if rough != 0 {

@@ -16,6 +16,7 @@
 //! With these rules the seven databases at their default sizes (`scenes/spd/*_default.nff[.gz]`) come
 //! within 1% of the Readme's counts, but for gears' refraction rays (3% fewer; `docs/performance.md`).
 
+use super::lanes::{Fx, Lanes, full};
 use super::options::Options;
 use super::stats::RayCounts;
 use crate::image::Film;
@@ -35,6 +36,58 @@ pub fn options(scene: &Scene) -> Options {
         spp: 0,
         spd: true,
         ..Options::new(scene)
+    }
+}
+
+/// Which of a hit's secondary rays are spawned, chosen once per frame from [`Options::spd`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Spawning {
+    /// A ray is spawned where its weight is positive.
+    ByWeight,
+    /// The procedure's rules 8 and 9: a transmitter spawns both its rays whatever their weight (but
+    /// the refracted one under a total internal reflection, whose light the mirror ray carries).
+    Procedure,
+}
+
+impl Spawning {
+    pub(crate) fn of(options: &Options) -> Self {
+        if options.spd {
+            Spawning::Procedure
+        } else {
+            Spawning::ByWeight
+        }
+    }
+
+    /// The lanes whose refracted ray of `weight` is spawned (among those that refract at all).
+    #[inline(always)]
+    pub(crate) fn refracted<L: Lanes<N>, const N: usize>(self, weight: Fx<L, N>) -> u32 {
+        match self {
+            Spawning::ByWeight => weight.positive(),
+            Spawning::Procedure => full::<N>(),
+        }
+    }
+
+    /// The mirror rays' weights and the lanes that spawn one, from each hit's `ks`, Fresnel
+    /// reflectance `kr`, `transmission`, its lanes of total internal reflection and of transmitters.
+    #[inline(always)]
+    pub(crate) fn reflected<L: Lanes<N>, const N: usize>(
+        self,
+        ks: Fx<L, N>,
+        kr: Fx<L, N>,
+        transmission: Fx<L, N>,
+        total: u32,
+        transmits: u32,
+    ) -> (Fx<L, N>, u32) {
+        match self {
+            Spawning::ByWeight => {
+                let weight = ks * kr;
+                (weight, weight.positive())
+            }
+            Spawning::Procedure => {
+                let weight = Fx::blend(total, ks + transmission, ks * kr);
+                (weight, weight.positive() | transmits)
+            }
+        }
     }
 }
 

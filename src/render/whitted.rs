@@ -16,6 +16,7 @@ use super::optics::beer;
 use super::options::{MAX_DEPTH, Options};
 use super::sampler::Sampler;
 use super::shade::{HitLanes, light};
+use super::spd::Spawning;
 use super::stats::{Count, RayKind, SampleRays};
 use crate::accel::lanes::Lanes8;
 use crate::accel::{Accel, Hit, PACKET, Prims, Tally, Verbs};
@@ -67,9 +68,8 @@ pub struct Whitted<'a> {
     roughness: Vec<f32>,
     /// Most bounces after the primary hit.
     max_depth: u32,
-    /// The SPD rules ([`super::spd`]): a hit on a transmitter always spawns its mirror ray (of weight
-    /// zero where Ks is 0) and, but for a total internal reflection, its refracted ray.
-    spd: bool,
+    /// Which secondary rays a hit spawns: by weight, or under the SPD's rules.
+    spawning: Spawning,
 }
 
 impl<'a> Whitted<'a> {
@@ -97,7 +97,7 @@ impl<'a> Whitted<'a> {
                 .collect(),
             // Unvalidated options are clamped rather than allowed to overflow the stack.
             max_depth: options.max_depth.min(MAX_DEPTH),
-            spd: options.spd,
+            spawning: Spawning::of(options),
         }
     }
 
@@ -270,7 +270,7 @@ impl<'a> Whitted<'a> {
     ) -> [super::shade::Spawned<L, N>; 2] {
         let rough = h.materials_where(|m| self.roughness[m as usize] > 0.0);
         let [mut refracted, mut reflected] =
-            h.bounces(self.scene, h.live(), self.spd, rough, |k, mirror, ng| {
+            h.bounces(self.scene, h.live(), self.spawning, rough, |k, mirror, ng| {
                 let roughness = self.roughness[h.material(k) as usize];
                 fuzz(mirror, ng, roughness, &mut samples[k].rng)
             });

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use whitted::files::{check_writable, write_atomically};
+use whitted::files::{self, check_writable, write_atomically};
 use whitted::heatmap::Scale;
 use whitted::heatmap::cost::CostKind;
 use whitted::image::film::Film;
@@ -12,7 +12,7 @@ use whitted::render::{Options, spd};
 
 use super::args::RenderArgs;
 use super::plan::{Plan, Target, stop_file};
-use crate::cli::{Failure, console, outputs};
+use crate::cli::{Failure, console};
 
 /// Checks every file the render may write, before the scene is loaded: the output, the stop file an
 /// interrupted image render keeps its sums in, and the snapshots of `--progressive-out`.
@@ -22,7 +22,7 @@ pub fn check_outputs(args: &RenderArgs) -> Result<(), Failure> {
         return Ok(());
     }
     let partial = args.writes_partial();
-    outputs::check(&args.output, partial)?;
+    files::check(&args.output, partial)?;
     let stop = stop_file(&args.output, partial);
     if let Some(dir) = &args.progressive_out {
         let heatmaps = heatmap_paths(&args.output);
@@ -33,7 +33,7 @@ pub fn check_outputs(args: &RenderArgs) -> Result<(), Failure> {
         if args.report.heatmap.is_some() {
             files.extend(heatmaps.iter().map(|p| (p.as_path(), "a file of the heatmap")));
         }
-        outputs::apart(dir, &files).map_err(Failure::Usage)?;
+        files::apart(dir, &files).map_err(Failure::Usage)?;
     }
     if !partial {
         check_writable(&stop).map_err(|e| {
@@ -50,7 +50,7 @@ pub fn check_outputs(args: &RenderArgs) -> Result<(), Failure> {
     }
     match &args.progressive_out {
         Some(dir) if !partial && args.passes > 1 => {
-            Ok(outputs::check_snapshots(dir, &args.output, args.passes)?)
+            Ok(files::check_snapshots(dir, &args.output, args.passes)?)
         }
         _ => Ok(()),
     }
@@ -95,7 +95,7 @@ pub fn write(plan: &Plan, acc: &Progressive) -> whitted::Result<()> {
     if let Some(dir) = snapshots {
         std::fs::create_dir_all(dir)
             .map_err(|e| whitted::Error::file(dir, format!("cannot create the directory: {e}")))?;
-        film.write(&outputs::snapshot(dir, &plan.output, acc.passes()), srgb)?;
+        film.write(&files::snapshot(dir, &plan.output, acc.passes()), srgb)?;
     }
     Ok(())
 }

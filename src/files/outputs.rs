@@ -3,12 +3,13 @@
 
 use std::path::{Path, PathBuf};
 
-use whitted::files::{check_writable, takes_new_files};
-use whitted::image::film::ImageFormat;
+use super::{check_writable, takes_new_files};
+use crate::error::{Error, Result};
+use crate::image::ImageFormat;
 
 /// Checks that `path` names an image format (or, with `partial`, takes a `.partial` file) and can be
 /// written as the render will write it ([`check_writable`]).
-pub fn check(path: &Path, partial: bool) -> whitted::Result<()> {
+pub fn check(path: &Path, partial: bool) -> Result<()> {
     if !partial {
         ImageFormat::of(path)?;
     }
@@ -33,7 +34,7 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 
 /// Checks that `dir`, the snapshots' directory (`--progressive-out`), is none of the render's `files`
 /// (each with what it is: the output image, the stop file, a heatmap's file), nor under one.
-pub fn apart(dir: &Path, files: &[(&Path, &str)]) -> whitted::Result<()> {
+pub fn apart(dir: &Path, files: &[(&Path, &str)]) -> Result<()> {
     // Lexically, as the names are written: none may exist yet.
     let same = |other: &Path| match (std::path::absolute(dir), std::path::absolute(other)) {
         (Ok(a), Ok(b)) => a.starts_with(b),
@@ -41,7 +42,7 @@ pub fn apart(dir: &Path, files: &[(&Path, &str)]) -> whitted::Result<()> {
     };
     match files.iter().find(|(file, _)| same(file)) {
         None => Ok(()),
-        Some((_, what)) => Err(whitted::Error::file(
+        Some((_, what)) => Err(Error::file(
             dir,
             format!(
                 "--progressive-out names {what}, or a directory under it: expected a directory of its own for the snapshots"
@@ -54,7 +55,7 @@ pub fn apart(dir: &Path, files: &[(&Path, &str)]) -> whitted::Result<()> {
 /// of passes 1 to `passes`) can be written in `dir`: it is a directory, or can be made one (it is made
 /// at the first snapshot, so that a render refused later leaves nothing behind), and no name a
 /// snapshot may take there is held by a directory, a link or a device.
-pub fn check_snapshots(dir: &Path, output: &Path, passes: u32) -> whitted::Result<()> {
+pub fn check_snapshots(dir: &Path, output: &Path, passes: u32) -> Result<()> {
     // The nearest directory that exists: `dir` itself, or where it will be made.
     let mut existing = dir;
     while !existing.as_os_str().is_empty() && std::fs::symlink_metadata(existing).is_err() {
@@ -66,7 +67,7 @@ pub fn check_snapshots(dir: &Path, output: &Path, passes: u32) -> whitted::Resul
         existing
     };
     if !existing.is_dir() {
-        return Err(whitted::Error::file(
+        return Err(Error::file(
             existing,
             "is not a directory: --progressive-out cannot keep its snapshots under it",
         ));
@@ -74,10 +75,10 @@ pub fn check_snapshots(dir: &Path, output: &Path, passes: u32) -> whitted::Resul
     if existing != dir {
         // Made at the first snapshot: what exists of its path must take new entries.
         return takes_new_files(existing)
-            .map_err(|e| whitted::Error::file(dir, format!("cannot make the directory: {e}")));
+            .map_err(|e| Error::file(dir, format!("cannot make the directory: {e}")));
     }
-    let entries = std::fs::read_dir(dir)
-        .map_err(|e| whitted::Error::file(dir, format!("cannot read the directory: {e}")))?;
+    let entries =
+        std::fs::read_dir(dir).map_err(|e| Error::file(dir, format!("cannot read the directory: {e}")))?;
     for entry in entries.flatten() {
         let taken = snapshot_pass(&entry.file_name(), output).is_some_and(|n| (1..=passes).contains(&n));
         if taken {
