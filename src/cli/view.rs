@@ -51,12 +51,12 @@ pub fn run(args: &ViewArgs) -> Result<(), Failure> {
     if let Some(path) = &args.screenshot {
         files::check(path, false)?;
     }
-    let scene = load_scene(args.scene.as_deref(), args.format)?;
+    let pool = thread_pool(args.frame.threads)?;
+    let scene = pool.install(|| load_scene(args.scene.as_deref(), args.format))?;
     warn(&scene.warnings);
     let options = args.frame.options(&scene, args.max_depth);
     check_window(&args.frame, &options).map_err(Failure::Usage)?;
     options.validate().map_err(Failure::Usage)?;
-    let pool = thread_pool(args.frame.threads)?;
     let name = match &args.scene {
         Some(path) => path
             .file_name()

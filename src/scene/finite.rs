@@ -7,6 +7,15 @@ use glam::Vec3;
 
 use super::store::{Scene, Vec3s};
 
+/// The error for a primitive of kind `what` (as [`Scene::overflow_since`] names it) out of range.
+pub(super) fn overflow_message(what: &str) -> String {
+    format!(
+        "the {what} reaches past the largest finite coordinate, {:e}: expected a size, position, \
+         scale or translation that keeps it within range",
+        f32::MAX
+    )
+}
+
 /// How many primitives of each kind a scene held, to check those added since (the default: none).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Counts([usize; 6]);

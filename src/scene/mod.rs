@@ -2,6 +2,7 @@
 
 mod fingerprint;
 mod finite;
+mod include;
 pub mod lex;
 pub mod obj;
 pub mod p3f;

@@ -7,11 +7,13 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 
+use super::MeshData;
+use super::finite::overflow_message;
+use super::include::{self, Include};
 use super::lex::{self, Lexer, Tok, show};
 use super::polygon::triangulate;
 use super::store::{AccelHint, Camera, MAX_LIGHT_SAMPLES, Material, MaterialId, Scene, check_resolution};
-use super::{MeshData, load_mesh};
-use crate::error::{Error, Location, Result};
+use crate::error::{Error, Result};
 
 /// The keywords a scene may use, for the unknown-keyword message.
 pub(crate) const KEYWORDS: &str =
@@ -38,6 +40,7 @@ pub fn parse(path: &Path, reader: Box<dyn Read + Send>) -> Result<Scene> {
         points: Vec::new(),
         normals: Vec::new(),
         tris: Vec::new(),
+        includes: Vec::new(),
     };
     parser.run()?;
     Ok(parser.scene)
@@ -92,15 +95,16 @@ struct Parser {
     points: Vec<Vec3>,
     normals: Vec<Vec3>,
     tris: Vec<[u32; 3]>,
+    /// Includes read and not yet loaded.
+    includes: Vec<Include>,
 }
 
 impl Parser {
     fn run(&mut self) -> Result<()> {
-        let mut any = false;
-        while let Some(tok) = self.lx.next_token()? {
-            any = true;
-            self.statement(tok)?;
-        }
+        let statements = self.statements();
+        // An include's error comes before any later statement's.
+        self.load_includes()?;
+        let any = statements?;
         if !any {
             return Err(Error::file(
                 self.lx.path(),
@@ -115,21 +119,34 @@ impl Parser {
         Ok(())
     }
 
+    /// The statements to the end of the file; whether there was one.
+    fn statements(&mut self) -> Result<bool> {
+        let mut any = false;
+        while let Some(tok) = self.lx.next_token()? {
+            any = true;
+            self.statement(tok)?;
+        }
+        Ok(any)
+    }
+
     /// One statement; what it added must lie within the range of `f32` ([`Scene::overflow_since`]).
+    /// The includes read so far are loaded before a statement that adds triangles after theirs.
     fn statement(&mut self, tok: Tok) -> Result<()> {
+        if !self.includes.is_empty() && matches!(self.lx.text(&tok), b"p" | b"pp" | b"mesh") {
+            self.load_includes()?;
+        }
         let before = self.scene.counts();
         self.statement_body(tok)?;
         match self.scene.overflow_since(before) {
-            Some(what) => Err(self.lx.error_at(
-                &tok,
-                format!(
-                    "the {what} reaches past the largest finite coordinate, {:e}: expected a size, \
-                     position, scale or translation that keeps it within range",
-                    f32::MAX
-                ),
-            )),
+            Some(what) => Err(self.lx.error_at(&tok, overflow_message(what))),
             None => Ok(()),
         }
+    }
+
+    /// Loads the includes read so far, side by side ([`include::load`]).
+    fn load_includes(&mut self) -> Result<()> {
+        let includes = std::mem::take(&mut self.includes);
+        include::load(&includes, self.lx.path(), &mut self.scene)
     }
 
     fn statement_body(&mut self, tok: Tok) -> Result<()> {
@@ -578,7 +595,8 @@ impl Parser {
         Ok(())
     }
 
-    /// `include model.{ply,obj}[.gz] [scale S] [translate X Y Z]`.
+    /// `include model.{ply,obj}[.gz] [scale S] [translate X Y Z]`: its mesh is loaded with the
+    /// includes around it ([`include`]).
     fn include(&mut self) -> Result<()> {
         let (tok, path) = self.path_token("a file name after \"include\"")?;
         let mut scale = 1.0;
@@ -609,24 +627,14 @@ impl Parser {
                 format!("cannot open include file \"{}\": {reason}", path.display()),
             ));
         }
-        let mut mesh = load_mesh(&path).map_err(|e| match e.location {
-            // A mesh of an unknown kind: say so at the include line.
-            Location::File if e.path.as_deref() == Some(path.as_path()) => self.lx.error_at(&tok, e.message),
-            _ => e,
-        })?;
-        for p in &mut mesh.positions {
-            *p = *p * scale + translate;
-        }
-        // Normals transform by the inverse transpose, 1/S here: a uniform scale keeps their direction, a
-        // negative one (a point reflection) reverses it.
-        if scale < 0.0 {
-            for n in &mut mesh.normals {
-                *n = -*n;
-            }
-        }
-        let m = self.current_material();
-        self.scene
-            .add_mesh(&mesh, m)
-            .map_err(|e| self.lx.error_at(&tok, e.message))
+        let material = self.current_material();
+        self.includes.push(Include {
+            tok,
+            path,
+            scale,
+            translate,
+            material,
+        });
+        Ok(())
     }
 }

@@ -135,6 +135,15 @@ impl Triangles {
         [v0, v0 + self.e1.get(i), v0 + self.e2.get(i)]
     }
 
+    /// Makes room for `n` more triangles.
+    pub fn reserve(&mut self, n: usize) {
+        for v in [&mut self.v0, &mut self.e1, &mut self.e2] {
+            v.reserve(n);
+        }
+        self.material.reserve(n);
+        self.normals.reserve(n);
+    }
+
     /// True if triangle `i` has no area (it can never be hit; it is kept so that counts match the file).
     pub fn is_degenerate(&self, i: usize) -> bool {
         self.e1.get(i).cross(self.e2.get(i)).length_squared() == 0.0
@@ -515,12 +524,7 @@ impl Scene {
                 mesh.normal_triangles.len()
             )));
         }
-        let t = &mut self.triangles;
-        t.v0.reserve(count);
-        t.e1.reserve(count);
-        t.e2.reserve(count);
-        t.material.reserve(count);
-        t.normals.reserve(count);
+        self.triangles.reserve(count);
         for (k, tri) in mesh.triangles.iter().enumerate() {
             let Some([a, b, c]) = corners(&mesh.positions, tri) else {
                 return Err(Error::msg(format!(

@@ -2,12 +2,14 @@
 //! `tests/golden/images.txt` with every accelerator and kernel of the test kit (`kit::contestants`: every
 //! build, on every instruction set this CPU has) and with brute force, each rendered once; frames that
 //! end in partial packets agree with single rays, and the big scenes agree with brute force on a small
-//! frame. The recorded images are a regression check beside the closed-form ones (`shading.rs`): they
-//! say that an image changed, not that it is right; `tests/golden/images.txt` says where they come from.
+//! frame; the scenes of millions of triangles that the table marks `exhaustive`, in the exhaustive
+//! tier, on the grid and the default structure. The recorded images are a regression check beside the
+//! closed-form ones (`shading.rs`): they say that an image changed, not that it is right;
+//! `tests/golden/images.txt` says where they come from.
 
 use std::time::Instant;
 
-use whitted::accel::{Accel, AccelKind, Prims};
+use whitted::accel::{Accel, AccelKind, Isa, Prims};
 use whitted::kit::contestants::{self, Contestant};
 use whitted::render::{Kernel, Options, Renderer};
 use whitted::scene::{self, Scene};
@@ -31,8 +33,17 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     })
 }
 
-/// The recorded digests: `path digest` per line, `#` comments.
-fn recorded() -> Vec<(String, u64)> {
+/// A recorded digest.
+struct Recorded {
+    path: String,
+    digest: u64,
+    /// Marked `exhaustive`: a scene of millions of triangles, too big to build every structure of
+    /// in the normal tier, checked by [`big_scenes_render_the_recorded_bytes`].
+    exhaustive: bool,
+}
+
+/// The recorded digests: `path digest [exhaustive]` per line, `#` comments.
+fn recorded() -> Vec<Recorded> {
     let text = std::fs::read_to_string(common::root().join("tests/golden/images.txt")).unwrap();
     text.lines()
         .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
@@ -40,7 +51,18 @@ fn recorded() -> Vec<(String, u64)> {
             let mut words = l.split_whitespace();
             let path = words.next().unwrap().to_string();
             let digest = u64::from_str_radix(words.next().unwrap(), 16).unwrap();
-            (path, digest)
+            let exhaustive = match words.next() {
+                None => false,
+                Some("exhaustive") => true,
+                Some(other) => {
+                    panic!("{path}: expected `exhaustive` or nothing after the digest, found {other}")
+                }
+            };
+            Recorded {
+                path,
+                digest,
+                exhaustive,
+            }
         })
         .collect()
 }
@@ -127,13 +149,55 @@ fn every_scene_renders_the_recorded_bytes_with_every_accelerator_and_kernel() {
         .map(|p| p.strip_prefix(common::root()).unwrap().display().to_string())
         .collect();
     files.sort();
-    let listed: Vec<String> = table.iter().map(|(p, _)| p.clone()).collect();
+    let listed: Vec<String> = table.iter().map(|r| r.path.clone()).collect();
     assert_eq!(
         listed, files,
         "tests/golden/images.txt lists other scenes than scenes/ holds"
     );
-    for (path, want) in &table {
-        check(path, *want);
+    for r in table.iter().filter(|r| !r.exhaustive) {
+        check(&r.path, r.digest);
+    }
+}
+
+/// The scenes marked `exhaustive` (millions of triangles) render their recorded bytes with the
+/// default structure on every instruction set this CPU has, both kernels, and with the grid; and
+/// the default structure's single rays agree with brute force at 8x8.
+#[test]
+#[ignore = "exhaustive tier: ten full dragons, 8.7M triangles, loaded and built three times"]
+fn big_scenes_render_the_recorded_bytes() {
+    let big: Vec<Recorded> = recorded().into_iter().filter(|r| r.exhaustive).collect();
+    assert!(
+        !big.is_empty(),
+        "tests/golden/images.txt marks no scene exhaustive"
+    );
+    for r in &big {
+        let scene = scene::load(&common::root().join(&r.path)).unwrap_or_else(|e| panic!("{e}"));
+        let prims = Prims::new(&scene);
+        let best = Accel::build(prims, AccelKind::best());
+        let mut accels = vec![("grid".to_string(), Accel::build(prims, AccelKind::Grid))];
+        for isa in [Isa::Portable, Isa::Avx2, Isa::Avx512] {
+            let mut copy = best.clone();
+            if copy.set_simd(isa) {
+                accels.push((format!("{:?} {isa:?}", AccelKind::best()), copy));
+            }
+        }
+        for (name, accel) in &accels {
+            for kernel in Kernel::ALL {
+                let got = fnv1a(&render(&scene, accel, RECORDED, kernel));
+                assert_eq!(
+                    format!("{got:016x}"),
+                    format!("{:016x}", r.digest),
+                    "{}: {name}, {kernel:?} kernel renders other bytes than recorded",
+                    r.path
+                );
+            }
+        }
+        let brute = Accel::build(prims, AccelKind::None);
+        assert!(
+            render(&scene, &brute, (8, 8), Kernel::Single) == render(&scene, &best, (8, 8), Kernel::Single),
+            "{}: brute force differs at 8x8",
+            r.path
+        );
     }
 }
 

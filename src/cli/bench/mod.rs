@@ -21,15 +21,15 @@ use super::setup::{load_scene, thread_pool, warn};
 /// Renders the frames and prints their timing.
 pub fn run(args: &BenchArgs) -> Result<(), Failure> {
     let path = plan::scene(args)?;
+    let pool = thread_pool(args.frame.threads)?;
     let start = Instant::now();
-    let mut scene = load_scene(Some(&path), args.format)?;
+    let mut scene = pool.install(|| load_scene(Some(&path), args.format))?;
     warn(&scene.warnings);
     args.camera.apply(&mut scene.camera).map_err(Failure::Usage)?;
     let loaded = start.elapsed();
     let options = plan::options(args, &scene).map_err(Failure::Usage)?;
     // Checked before the structures are built: the frames are allocated after.
     memory::check(options.width, options.height, options.count_steps, false).map_err(whitted::Error::msg)?;
-    let pool = thread_pool(args.frame.threads)?;
     let build = |kind: AccelKind| {
         let start = Instant::now();
         let accel = pool.install(|| Accel::try_build_with(Prims::new(&scene), kind, Default::default()))?;

@@ -37,7 +37,9 @@ pub enum Ended {
 pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
     let start = Instant::now();
     check_outputs(args)?;
-    let mut scene = load_scene(args.scene.as_deref(), args.format)?;
+    // The scene's includes load on the render's threads.
+    let pool = thread_pool(args.frame.threads)?;
+    let mut scene = pool.install(|| load_scene(args.scene.as_deref(), args.format))?;
     warn(&scene.warnings);
     let mut plan = Plan::new(args, &mut scene).map_err(Failure::Usage)?;
     // A part's sums cover its tiles only; a whole frame is refused here rather than aborted later, and
@@ -51,7 +53,6 @@ pub fn run(args: &RenderArgs) -> Result<Ended, Failure> {
     }
     // The skybox is read whole for a part too.
     memory::check_skybox(Background::bytes(&scene), frame).map_err(whitted::Error::msg)?;
-    let pool = thread_pool(plan.threads)?;
     let loaded = start.elapsed();
     let build_start = Instant::now();
     let accel = pool.install(|| Accel::try_build_with(Prims::new(&scene), plan.accel, plan.build))?;

@@ -22,8 +22,6 @@ use crate::cli::frame::{DEFAULT_DEPTH, build_options, checked};
 pub struct Plan {
     /// What the renderer is given, within its ranges.
     pub options: Options,
-    /// Worker threads (`None`: all cores), at least 1.
-    pub threads: Option<usize>,
     /// The acceleration structure.
     pub accel: AccelKind,
     /// How a BVH2 is built.
@@ -96,7 +94,6 @@ impl Plan {
         let target = target(args, scene, &options)?;
         Ok(Plan {
             options,
-            threads: args.frame.threads,
             accel: args.frame.accel,
             build: build_options(args.build, args.bins as usize),
             total_passes: args.passes,

@@ -84,8 +84,10 @@ fn threads_are_parsed_within_1_to_1024() {
         let e = parsed.err().expect("refused").to_string();
         assert!(e.contains(expected), "{e}");
     }
-    assert_eq!(plan("--threads 3").threads, Some(3));
-    assert_eq!(plan("--threads 1024").threads, Some(1024));
+    let threads =
+        |value| Render::try_parse_from(["render", "--threads", value]).map(|r| r.args.frame.threads);
+    assert_eq!(threads("3").expect("accepted"), Some(3));
+    assert_eq!(threads("1024").expect("accepted"), Some(1024));
 }
 
 /// `--max-depth` too: past 64 bounces is a usage error (the library refuses it as well,
