@@ -114,7 +114,7 @@ fn build(c: &mut Criterion) {
             use whitted::accel::embree::{Embree, Quality};
             for quality in [Quality::Medium, Quality::High] {
                 g.bench_function(format!("embree-{}/{threads}-threads", quality.name()), |b| {
-                    b.iter(|| Embree::new(prims, quality, *threads).expect("Embree builds"))
+                    b.iter(|| Embree::new(prims, quality, *threads, None).expect("Embree builds"))
                 });
             }
         }

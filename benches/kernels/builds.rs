@@ -74,13 +74,14 @@ pub fn record_and_compare(key: &str, header: &[&str], rows: &[(String, Vec<Optio
     // The two builds ran at different times, and these machines' speed drifts by more than the
     // differences looked for. Embree is the same library code in both builds: its own ratio is the
     // drift, and every row is divided by it.
+    let yardstick = yardstick();
     let drift = ratios
         .iter()
-        .find(|(id, _)| id.as_str() == YARDSTICK)
+        .find(|(id, _)| **id == yardstick)
         .map(|(_, r)| r.clone());
     match &drift {
         Some(d) => println!(
-            "\n{YARDSTICK}, the same code in both builds, measured {} native / portable: the machine's drift \
+            "\n{yardstick}, the same code in both builds, measured {} native / portable: the machine's drift \
              between the runs, divided out below",
             d.iter()
                 .map(|r| r.map_or("-".into(), |r| format!("{r:.2}x")))
@@ -88,7 +89,7 @@ pub fn record_and_compare(key: &str, header: &[&str], rows: &[(String, Vec<Optio
                 .join(" / ")
         ),
         None => println!(
-            "\n(no {YARDSTICK} row, built with `--features bench-embree`, to divide out the machine's drift \
+            "\n(no {yardstick} row, built with `--features bench-embree`, to divide out the machine's drift \
              between the two runs: the ratios below include it)"
         ),
     }
@@ -137,7 +138,9 @@ pub fn record_and_compare(key: &str, header: &[&str], rows: &[(String, Vec<Optio
 const TOLERANCE: f64 = 0.03;
 
 /// The row whose code does not depend on the build: Embree's single rays (a system library).
-const YARDSTICK: &str = "embree";
+fn yardstick() -> String {
+    format!("embree-{}", crate::contestant::auto_set())
+}
 
 /// A kept run: its CPU and rows.
 fn read(path: &std::path::Path) -> Option<Record> {

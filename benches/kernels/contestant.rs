@@ -22,7 +22,7 @@ pub enum Side {
 
 /// A structure with one of its kernels.
 pub trait Contestant: Sync {
-    /// Its bench id and row in the table: `bvh4-avx2`, `bvh8-avx2-packets`, `obvhs-cwbvh`, `embree-8`.
+    /// Its bench id and row in the table: `bvh4-avx2`, `bvh8-avx2-packets`, `obvhs-cwbvh`, `embree-avx2-8`.
     fn id(&self) -> &str;
     /// Ours or a peer's.
     fn side(&self) -> Side;
@@ -68,14 +68,32 @@ pub enum Verb {
 /// The filter that runs the comparison table's rows alone: `cargo bench --bench kernels -- table`.
 pub const TABLE: &str = "table";
 
-/// The instruction set the wide BVHs run unless told otherwise (`--simd auto`: the CPU's best), as the
-/// kit names it in their rows.
-pub fn auto_set() -> &'static str {
-    match Isa::detect() {
+/// The instruction set the race runs on: `WHITTED_BENCH_ISA` (`avx2` or `avx512`), so that an AVX-512
+/// CPU can race on AVX2 too, else the CPU's best (as `--simd auto` picks). The table's rows of ours
+/// run on it, and so does Embree. An instruction set the CPU lacks is refused.
+pub fn race_isa() -> Isa {
+    let isa = match std::env::var("WHITTED_BENCH_ISA").as_deref() {
+        Err(_) => return Isa::detect(),
+        Ok("avx2") => Isa::Avx2,
+        Ok("avx512") => Isa::Avx512,
+        Ok(other) => panic!("WHITTED_BENCH_ISA={other}: expected avx2 or avx512"),
+    };
+    assert!(isa.available(), "WHITTED_BENCH_ISA: this CPU has no {isa:?}");
+    isa
+}
+
+/// The kit's name of an instruction set, as in its rows (`bvh8 avx2`).
+pub fn isa_name(isa: Isa) -> &'static str {
+    match isa {
         Isa::Avx512 => "avx512",
         Isa::Avx2 => "avx2",
         Isa::Portable => "portable",
     }
+}
+
+/// The name of [`race_isa`].
+pub fn auto_set() -> &'static str {
+    isa_name(race_isa())
 }
 
 /// The kit's names of the structures that "our best" is taken over, with their single rays and their
@@ -118,7 +136,7 @@ impl<'a> Ours<'a> {
         let table = table_structures();
         let mut out = Vec::new();
         for b in built.iter().filter(|b| !b.is_embree()) {
-            let auto = b.accel.simd().is_none_or(|s| s == Isa::detect());
+            let auto = b.accel.simd().is_none_or(|s| s == race_isa());
             if !auto && !matches!(b.accel, Accel::Bvh8(_)) {
                 continue;
             }

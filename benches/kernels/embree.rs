@@ -24,25 +24,28 @@ impl FirstHit for First<'_> {
     }
 }
 
-/// Embree's single rays (`embree`) or its 8-wide packets (`embree-8`) on one scene.
+/// Embree's single rays (`embree-avx2`) or its 8-wide packets (`embree-avx2-8`) on one scene, the
+/// instruction set its device was made for in the name.
 pub struct Embree<'a> {
     first: First<'a>,
     eight: bool,
+    id: String,
 }
 
 impl<'a> Embree<'a> {
-    /// Both kernels on `scene`.
-    pub fn both(scene: &'a Scene<'a>) -> [Embree<'a>; 2] {
+    /// Both kernels on `scene`, whose device runs `isa` (its name in the kit's words).
+    pub fn both(scene: &'a Scene<'a>, isa: &str) -> [Embree<'a>; 2] {
         [false, true].map(|eight| Embree {
             first: First(scene),
             eight,
+            id: format!("embree-{isa}{}", if eight { "-8" } else { "" }),
         })
     }
 }
 
 impl Contestant for Embree<'_> {
     fn id(&self) -> &str {
-        if self.eight { "embree-8" } else { "embree" }
+        &self.id
     }
 
     fn side(&self) -> Side {

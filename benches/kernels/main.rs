@@ -27,7 +27,9 @@
 //! native over portable per row with the rows where native is slower (`builds.rs`).
 //!
 //! `cargo bench --bench kernels`; `-- table` for the table's rows alone; `WHITTED_BENCH_QUICK=1` for a
-//! smoke run; `WHITTED_BENCH_SCENE` for one other scene (default: the full dragon, then res2).
+//! smoke run; `WHITTED_BENCH_SCENE` for one other scene (default: the full dragon, the field of ten
+//! full dragons, then res2); `WHITTED_BENCH_ISA=avx2` (or `avx512`) races the table's rows of ours and
+//! Embree on that instruction set, so that an AVX-512 CPU measures the AVX2 race too.
 
 mod builds;
 #[path = "../common/mod.rs"]
@@ -252,7 +254,13 @@ fn main() {
         c = c.with_benchmark_filter(BenchmarkFilter::AcceptAll);
     }
     let since = SystemTime::now();
-    for path in common::scenes() {
+    let mut scenes = common::scenes();
+    if std::env::var_os("WHITTED_BENCH_SCENE").is_none() && !common::quick() {
+        // Ten full dragons side by side, 8.7 M triangles: a tree that does not fit the caches.
+        let field = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/dragon_field.p3f");
+        scenes.insert(1, field);
+    }
+    for path in scenes {
         scene(&mut c, &path, since, rows);
     }
     c.final_summary();
@@ -268,10 +276,17 @@ fn structures(prims: Prims<'_>, rows: Rows) -> Vec<Built<'_>> {
         .iter()
         .filter(|b| b.kind == AccelKind::Grid || b.each_simd)
         .map(|b| {
-            let accel = b.build(prims);
+            let mut accel = b.build(prims);
             // As the kit names them, where a scene past the wide BVHs' limit gets a BVH2 without a set.
             let name = match accel.simd() {
-                Some(_) => format!("{} {}", b.name, contestant::auto_set()),
+                Some(_) => {
+                    assert!(
+                        accel.set_simd(contestant::race_isa()),
+                        "{}: the race's set refused",
+                        b.name
+                    );
+                    format!("{} {}", b.name, contestant::auto_set())
+                }
                 None => b.name.to_string(),
             };
             Built { name, accel }
@@ -354,10 +369,10 @@ fn scene(c: &mut Criterion, path: &std::path::Path, since: SystemTime, rows: Row
     let embree_scene = {
         let all = std::thread::available_parallelism().map_or(1, |n| n.get());
         use whitted::accel::embree::{Embree, Quality};
-        Embree::new(prims, Quality::High, all).expect("Embree builds")
+        Embree::new(prims, Quality::High, all, Some(contestant::race_isa())).expect("Embree builds")
     };
     #[cfg(feature = "bench-embree")]
-    let embree = embree::Embree::both(&embree_scene);
+    let embree = embree::Embree::both(&embree_scene, contestant::auto_set());
     #[cfg(feature = "bench-tinybvh")]
     let tiny = tinybvh::Tiny::new(&scene).usable(&sets);
 

@@ -182,7 +182,7 @@ impl<'a> Accel<'a> {
             #[cfg(feature = "embree")]
             AccelKind::Embree => {
                 let threads = rayon::current_num_threads();
-                embree::Embree::new(prims, embree::DEFAULT_QUALITY, threads).map(Accel::Embree)
+                embree::Embree::new(prims, embree::DEFAULT_QUALITY, threads, None).map(Accel::Embree)
             }
             _ => Ok(Self::build_with(prims, kind, options)),
         }

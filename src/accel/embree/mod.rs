@@ -46,6 +46,7 @@ use std::ffi::{CStr, CString, c_char, c_int, c_void};
 use std::fmt;
 use std::sync::{Arc, Mutex};
 
+use super::Isa;
 use super::prims::{PrimKind, Prims};
 use crate::error::{Error, Result};
 use callbacks::{Others, bounds, intersect, occluded};
@@ -94,6 +95,8 @@ struct Inner<'a> {
     messages: Box<Messages>,
     quality: Quality,
     threads: usize,
+    /// The instruction set asked for (`None`: Embree's choice, the best the CPU has).
+    isa: Option<Isa>,
     triangles: usize,
 }
 
@@ -170,8 +173,9 @@ unsafe extern "C" fn on_error(user: *mut c_void, code: c_int, message: *const c_
 
 impl<'a> Embree<'a> {
     /// Builds the Embree scene of `prims` at `quality`, with `threads` build threads (Embree's own
-    /// thread pool; the tracing calls run on the caller's threads).
-    pub fn new(prims: Prims<'a>, quality: Quality, threads: usize) -> Result<Self> {
+    /// thread pool; the tracing calls run on the caller's threads), its kernels on `isa` (`None`: the
+    /// best the CPU has, Embree's own choice), so that both sides of a race can run one instruction set.
+    pub fn new(prims: Prims<'a>, quality: Quality, threads: usize, isa: Option<Isa>) -> Result<Self> {
         let scene = prims.scene;
         let reach = (0..prims.bounded())
             .map(|id| {
@@ -188,7 +192,22 @@ impl<'a> Embree<'a> {
         let others: Vec<u32> = (0..prims.bounded())
             .filter(|&id| !matches!(prims.kind(id), PrimKind::Triangle(_)))
             .collect();
-        let config = CString::new(format!("threads={}", threads.max(1))).expect("no NUL");
+        let mut config = format!("threads={}", threads.max(1));
+        if let Some(isa) = isa {
+            if !isa.available() {
+                return Err(Error::msg(format!(
+                    "Embree cannot run {isa:?} kernels on this CPU, which lacks the instructions"
+                )));
+            }
+            // Embree 3's names (rtcNewDevice(3)); its AVX-512 kernels are the Skylake-X set.
+            let name = match isa {
+                Isa::Portable => "sse2",
+                Isa::Avx2 => "avx2",
+                Isa::Avx512 => "avx512",
+            };
+            config += &format!(",isa={name}");
+        }
+        let config = CString::new(config).expect("no NUL");
         // SAFETY: rtcNewDevice takes a NUL-terminated configuration string.
         let device = unsafe { ffi::rtcNewDevice(config.as_ptr()) };
         if device.is_null() {
@@ -207,6 +226,7 @@ impl<'a> Embree<'a> {
             messages: Box::new(Mutex::new(Vec::new())),
             quality,
             threads: threads.max(1),
+            isa,
             triangles: scene.triangles.len(),
         };
         // SAFETY: from here on every call gets the live device (released in Inner's Drop, also on the
@@ -294,10 +314,11 @@ impl<'a> Embree<'a> {
     pub fn describe(&self) -> String {
         let (t, o) = self.counts();
         format!(
-            "embree {} ({} tasking): {} quality BVH, built on {} threads, over {t} triangles and {o} \
-             other primitives (user geometry); {} planes beside it",
+            "embree {} ({} tasking, {} kernels): {} quality BVH, built on {} threads, over {t} \
+             triangles and {o} other primitives (user geometry); {} planes beside it",
             self.version(),
             self.tasking(),
+            self.inner.isa.map_or("its best".into(), |isa| format!("{isa:?}")),
             self.inner.quality.name(),
             self.inner.threads,
             self.inner.prims.planes().len()

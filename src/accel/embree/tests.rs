@@ -33,7 +33,7 @@ fn barycentrics_and_t_match_moller_trumbore() {
     );
     s.add_triangle(a, b, c, m);
     let prims = Prims::new(&s);
-    let e = Embree::new(prims, Quality::High, 1).unwrap();
+    let e = Embree::new(prims, Quality::High, 1, None).unwrap();
     let mut rng = TestRng::new(3);
     let mut compared = 0;
     for _ in 0..1000 {
@@ -76,7 +76,7 @@ fn user_geometry_and_planes() {
     let z = |x: f32, y: f32| Vec3::new(x, y, -3.0);
     assert!(s.add_plane(z(0.0, 0.0), z(1.0, 0.0), z(0.0, 1.0), m));
     let prims = Prims::new(&s);
-    let e = Embree::new(prims, Quality::Medium, 2).unwrap();
+    let e = Embree::new(prims, Quality::Medium, 2, None).unwrap();
     assert_eq!(e.counts(), (0, 2));
     let ray = Ray::new(Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, -1.0));
     let mut hit = Hit::miss(f32::INFINITY);
@@ -118,7 +118,7 @@ fn rays_from_beyond_flt_large_find_our_hits() {
     let m = s.add_material(Material::default());
     s.add_sphere(Vec3::ZERO, 1e17, m);
     let prims = Prims::new(&s);
-    let e = Embree::new(prims, Quality::High, 1).unwrap();
+    let e = Embree::new(prims, Quality::High, 1, None).unwrap();
     let toward = Ray::new(Vec3::new(3e18, 0.0, 0.0), Vec3::NEG_X);
     let away = Ray::new(toward.origin, Vec3::X);
     let near = Ray::new(Vec3::new(0.0, 0.0, 5e17), Vec3::NEG_Z);
@@ -147,7 +147,7 @@ fn rays_from_beyond_flt_large_find_our_hits() {
     let mut huge = scene();
     let m = huge.add_material(Material::default());
     huge.add_sphere(Vec3::ZERO, 2e18, m);
-    let refused = Embree::new(Prims::new(&huge), Quality::High, 1).unwrap_err();
+    let refused = Embree::new(Prims::new(&huge), Quality::High, 1, None).unwrap_err();
     assert!(refused.message.contains("reach 2e18"), "{refused}");
 }
 
@@ -155,14 +155,14 @@ fn rays_from_beyond_flt_large_find_our_hits() {
 #[test]
 fn empty_and_planes_only() {
     let s = scene();
-    let e = Embree::new(Prims::new(&s), Quality::High, 1).unwrap();
+    let e = Embree::new(Prims::new(&s), Quality::High, 1, None).unwrap();
     let ray = Ray::new(Vec3::ZERO, Vec3::Z);
     assert!(!e.intersect(&ray, 0.0, &mut Hit::miss(f32::INFINITY)));
     let mut s = scene();
     let m = s.add_material(Material::default());
     let z = |x: f32, y: f32| Vec3::new(x, y, 2.0);
     assert!(s.add_plane(z(0.0, 0.0), z(1.0, 0.0), z(0.0, 1.0), m));
-    let e = Embree::new(Prims::new(&s), Quality::High, 1).unwrap();
+    let e = Embree::new(Prims::new(&s), Quality::High, 1, None).unwrap();
     let copy = e.clone();
     drop(e);
     let mut hit = Hit::miss(f32::INFINITY);
@@ -174,4 +174,47 @@ fn empty_and_planes_only() {
 fn send_and_sync() {
     fn check<T: Send + Sync>() {}
     check::<Embree<'static>>();
+}
+
+/// A device made for one instruction set: AVX2 (where the CPU has it) answers as Embree's own choice
+/// does and says so; a set the CPU lacks is refused with a message, not a crash.
+#[test]
+fn a_device_runs_the_instruction_set_asked_for() {
+    let mut s = scene();
+    let m = s.add_material(Material::default());
+    let mut rng = TestRng::new(11);
+    for _ in 0..200 {
+        let p = Vec3::new(rng.unit_f32(), rng.unit_f32(), rng.unit_f32()) * 4.0 - 2.0;
+        s.add_triangle(p, p + Vec3::X * 0.3, p + Vec3::Y * 0.3, m);
+    }
+    let prims = Prims::new(&s);
+    let own = Embree::new(prims, Quality::High, 1, None).unwrap();
+    assert!(own.describe().contains("its best kernels"), "{}", own.describe());
+    for isa in [Isa::Avx2, Isa::Avx512] {
+        let Ok(forced) = Embree::new(prims, Quality::High, 1, Some(isa)) else {
+            let e = Embree::new(prims, Quality::High, 1, Some(isa)).unwrap_err();
+            assert!(!isa.available(), "{isa:?} refused on a CPU that has it: {e}");
+            assert!(e.message.contains("lacks the instructions"), "{e}");
+            continue;
+        };
+        assert!(
+            forced.describe().contains(&format!("{isa:?} kernels")),
+            "{}",
+            forced.describe()
+        );
+        for _ in 0..500 {
+            let origin = Vec3::new(rng.unit_f32(), rng.unit_f32(), 0.0) * 4.0 - Vec3::new(2.0, 2.0, -5.0);
+            let ray = Ray::new(
+                origin,
+                Vec3::new(rng.unit_f32() * 0.2 - 0.1, rng.unit_f32() * 0.2 - 0.1, -1.0),
+            );
+            let (mut a, mut b) = (Hit::miss(f32::INFINITY), Hit::miss(f32::INFINITY));
+            assert_eq!(
+                own.intersect(&ray, 0.0, &mut a),
+                forced.intersect(&ray, 0.0, &mut b),
+                "{ray:?}"
+            );
+            assert_eq!((a.prim, a.t), (b.prim, b.t), "{isa:?}, {ray:?}");
+        }
+    }
 }
