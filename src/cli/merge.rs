@@ -29,7 +29,7 @@ pub struct MergeArgs {
 /// Checks the output, then checks and merges the parts and writes the image (nothing is written if
 /// any check fails).
 pub fn run(args: &MergeArgs) -> Result<(), Failure> {
-    files::check(&args.output, false)?;
+    whitted::image::check_output(&args.output, false)?;
     if let Some(part) = args.parts.iter().find(|p| files::same_file(&args.output, p)) {
         return Err(Failure::Usage(whitted::Error::file(
             &args.output,

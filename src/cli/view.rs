@@ -9,7 +9,6 @@ use whitted::view::{self, Config, MAX_WINDOW, state::MAX_VIEW_DEPTH};
 use super::Failure;
 use super::frame::{DEFAULT_DEPTH, FrameArgs};
 use super::setup::{load_scene, thread_pool, warn};
-use whitted::files;
 
 /// Arguments of `whitted view`.
 #[derive(Args)]
@@ -49,7 +48,7 @@ pub struct ViewArgs {
 /// Opens the window.
 pub fn run(args: &ViewArgs) -> Result<(), Failure> {
     if let Some(path) = &args.screenshot {
-        files::check(path, false)?;
+        whitted::image::check_output(path, false)?;
     }
     let pool = thread_pool(args.frame.threads)?;
     let scene = pool.install(|| load_scene(args.scene.as_deref(), args.format))?;

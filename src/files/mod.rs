@@ -1,7 +1,7 @@
 //! Where whitted meets the filesystem. Inputs are opened only when they are regular files, without
 //! blocking on a FIFO or reading a device without end. Every file a command writes is checked before
-//! any work (`outputs.rs`: the image's format and directory, the snapshots' names, outputs apart from
-//! each other and from the inputs) and written to a temporary beside the target, created exclusively
+//! any work (`outputs.rs`: its directory and what it would replace, the snapshots' names, outputs apart
+//! from each other and from the inputs; an image's format is `crate::image`'s to check) and written to a temporary beside the target, created exclusively
 //! under an unpredictable name (so a link planted there is never followed and two writers never share
 //! one), then renamed into place (`write.rs`): a failed, interrupted or killed write never leaves half
 //! a file under the real name, nor a temporary behind.
@@ -13,7 +13,7 @@ use std::path::Path;
 mod outputs;
 mod write;
 
-pub use outputs::{apart, check, check_snapshots, same_file, snapshot};
+pub use outputs::{apart, check_snapshots, same_file, snapshot};
 pub use write::{check_writable, remove_temporaries, takes_new_files, write_atomically};
 
 /// Opens `path` for reading if it is a regular file (a link to one is), else says why not. A device

@@ -5,16 +5,6 @@ use std::path::{Path, PathBuf};
 
 use super::{check_writable, takes_new_files};
 use crate::error::{Error, Result};
-use crate::image::ImageFormat;
-
-/// Checks that `path` names an image format (or, with `partial`, takes a `.partial` file) and can be
-/// written as the render will write it ([`check_writable`]).
-pub fn check(path: &Path, partial: bool) -> Result<()> {
-    if !partial {
-        ImageFormat::of(path)?;
-    }
-    check_writable(path)
-}
 
 /// Whether `a` and `b` are one file (the same device and inode, whatever the names; links followed).
 pub fn same_file(a: &Path, b: &Path) -> bool {
@@ -119,26 +109,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn refuses_unknown_formats_and_missing_directories_and_names_snapshots() {
+    fn names_snapshots_and_makes_their_directory_only_when_writing() {
         let dir = tempfile::tempdir().unwrap();
         let d = dir.path();
-        assert_eq!(
-            check(&d.join("out.gif"), false).unwrap_err().to_string(),
-            format!(
-                "{}: unknown image format: expected a .png, .ppm, .jpg, .jpeg or .exr file name",
-                d.join("out.gif").display()
-            )
-        );
-        check(&d.join("out.gif"), true).unwrap();
-        check(&d.join("out.JPG"), false).unwrap();
-        assert_eq!(
-            check(&d.join("missing/out.png"), false).unwrap_err().to_string(),
-            format!(
-                "{}: the directory {} does not exist",
-                d.join("missing/out.png").display(),
-                d.join("missing").display()
-            )
-        );
         assert_eq!(
             snapshot(Path::new("snaps"), Path::new("a/out.png"), 4),
             Path::new("snaps/out-0004.png")

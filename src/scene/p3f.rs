@@ -596,7 +596,7 @@ impl Parser {
     }
 
     /// `include model.{ply,obj}[.gz] [scale S] [translate X Y Z]`: its mesh is loaded with the
-    /// includes around it ([`include`]).
+    /// includes around it ([`mod@include`]).
     fn include(&mut self) -> Result<()> {
         let (tok, path) = self.path_token("a file name after \"include\"")?;
         let mut scale = 1.0;

@@ -22,7 +22,7 @@ pub fn check_outputs(args: &RenderArgs) -> Result<(), Failure> {
         return Ok(());
     }
     let partial = args.writes_partial();
-    files::check(&args.output, partial)?;
+    whitted::image::check_output(&args.output, partial)?;
     let stop = stop_file(&args.output, partial);
     if let Some(dir) = &args.progressive_out {
         let heatmaps = heatmap_paths(&args.output);
