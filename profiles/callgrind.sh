@@ -6,6 +6,8 @@
 # across toolchains. The per-loop scripts beside this one call it. FEATURES=... builds the driver with
 # those cargo features; SIM=1 adds callgrind's cache and branch simulation (its model of this CPU's
 # caches, read from cpuid, with no prefetcher) and prints D1 misses and mispredicted branches per unit.
+# Valgrind instruments nothing until the driver has built its inputs (`--instr-atstart=no`), so that a
+# big scene loads and builds at valgrind's plain speed; HOT_LOOPS_SCENE picks another scene (hot_loops.rs).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(dirname "$here")"
@@ -29,7 +31,7 @@ registry="${CARGO_HOME:-$HOME/.cargo}/registry/src/"
     echo "# profiles/$name.txt: written by profiles/$name.sh (callgrind, instructions executed)"
     echo "# $(rustc --version), $(valgrind --version), whitted $(git describe --always --dirty 2>/dev/null || echo unknown)"
     for loop in "$@"; do
-        valgrind --tool=callgrind --callgrind-out-file="$tmp/$loop.out" --toggle-collect='*measured_*' \
+        valgrind --tool=callgrind --callgrind-out-file="$tmp/$loop.out" --toggle-collect='*measured_*' --instr-atstart=no \
             "${sim[@]}" "$bin" "$loop" >"$tmp/$loop.count" 2>"$tmp/$loop.log" || {
             cat "$tmp/$loop.log" >&2
             exit 1
@@ -40,6 +42,8 @@ registry="${CARGO_HOME:-$HOME/.cargo}/registry/src/"
         echo
         echo "## $loop: $n $unit, $total instructions, $((total / n)) per ${unit%s}"
         if [ "${#sim[@]}" -gt 0 ]; then
+            # The caches valgrind modelled (sizes, associativity, line).
+            echo "modelled: $(sed -n 's/^desc: \(.*cache:.*\)/\1/p' "$tmp/$loop.out" | paste -sd';' - | sed 's/;/; /g')"
             # The simulated events' totals, in the order of callgrind's `events:` line.
             callgrind_annotate --threshold=100 "$tmp/$loop.out" 2>/dev/null | awk -v n="$n" -v unit="${unit%s}" '
                 /^Ir / { for (i = 1; i <= NF; i++) name[i] = $i }

@@ -3,7 +3,7 @@
 
 use whitted::accel::counters::{self, Steps};
 use whitted::accel::policy::HitPolicy;
-use whitted::accel::{Accel, Counting, Hit, Isa, PACKET, Plain, Tally};
+use whitted::accel::{Accel, Counting, Hit, Isa, PACKET, Plain, Tally, coherent_rays};
 use whitted::geometry::ray::Ray;
 use whitted::kit::contestants::{BUILDS, Contestant as Built};
 use whitted::kit::workload::packets_of;
@@ -63,6 +63,10 @@ pub enum Verb {
     Single,
     /// Packets of 8 consecutive rays.
     Packets,
+    /// Packets of 8 consecutive rays where they point alike, else ray by ray (`coherent_rays`: the
+    /// renderer's rule for its secondary rays), as Embree's hybrid packet kernels go to single rays
+    /// where a packet's rays part.
+    Hybrid,
 }
 
 /// The filter that runs the comparison table's rows alone: `cargo bench --bench kernels -- table`.
@@ -149,6 +153,9 @@ impl<'a> Ours<'a> {
             };
             if b.has_packet_kernel() {
                 push(format!("{id}-packets"), Verb::Packets);
+                if in_table {
+                    push(format!("{id}-hybrid"), Verb::Hybrid);
+                }
             }
             push(id, Verb::Single);
         }
@@ -166,7 +173,7 @@ impl Contestant for Ours<'_> {
     }
 
     fn packets(&self) -> bool {
-        self.verb == Verb::Packets
+        self.verb != Verb::Single
     }
 
     fn in_table(&self) -> bool {
@@ -221,14 +228,32 @@ impl Ours<'_> {
             }
         };
         let any = query == Query::Any;
+        // A hybrid row's packet whose rays point apart goes ray by ray through the single-ray verbs.
+        let live = |active: u8| (0..PACKET).filter(move |k| active >> k & 1 != 0);
+        let apart = |r: &[Ray; PACKET], active: u8| {
+            self.verb == Verb::Hybrid && !coherent_rays(live(active).map(|k| &r[k]))
+        };
         let hits = match (self.verb, any) {
-            (Verb::Packets, false) => packets_of(rays, |r, active, t_max| {
-                let mut hits = t_max.map(Hit::miss);
-                let hit = verbs.intersect_packet(r, active, 0.0, &mut hits);
+            (Verb::Packets | Verb::Hybrid, false) => packets_of(rays, |r, active, t_max| {
+                if apart(r, active) {
+                    return live(active).fold(0, |m, k| {
+                        let hit = verbs.intersect(&r[k], 0.0, &mut Hit::miss(t_max[k]));
+                        tally(1);
+                        m | u8::from(hit) << k
+                    });
+                }
+                let hit = verbs.intersect_packet(r, active, 0.0, &mut t_max.map(Hit::miss));
                 tally(PACKET);
                 hit
             }),
-            (Verb::Packets, true) => packets_of(rays, |r, active, t_max| {
+            (Verb::Packets | Verb::Hybrid, true) => packets_of(rays, |r, active, t_max| {
+                if apart(r, active) {
+                    return live(active).fold(0, |m, k| {
+                        let blocked = verbs.occluded(&r[k], 0.0, t_max[k]);
+                        tally(1);
+                        m | u8::from(blocked) << k
+                    });
+                }
                 let blocked = verbs.occluded_packet(r, active, 0.0, t_max);
                 tally(PACKET);
                 blocked

@@ -1,8 +1,10 @@
 //! Kernel throughput on the dragon workload (`docs/dragon-workload.md`), in Mrays/s through
 //! criterion's throughput: one loop over the contestants × the ray sets × one thread and all of them.
 //! The contestants: every structure of the test kit (`whitted::kit::contestants`) with its single-ray
-//! kernel, the wide BVHs with their packet kernel (8 consecutive rays a packet) too, the BVH8 on every
-//! instruction set and the others on the one `auto` picks (`Ours::all`); obvhs 0.4's CWBVH and BVH2
+//! kernel, the wide BVHs with their packet kernel (8 consecutive rays a packet) too, and the table's
+//! with their hybrid rows (a packet whose rays point into different octants ray by ray, the renderer's
+//! rule for its secondary rays), the BVH8 on every instruction set and the others on the one `auto`
+//! picks (`Ours::all`); obvhs 0.4's CWBVH and BVH2
 //! (`very_slow_build`, its best trees, traced with our triangle test); with `--features bench-embree`, Embree 3's single rays and
 //! 8-wide packets on its high-quality (spatial split) BVH, through the library's binding
 //! (`whitted::accel::embree`); with `--features bench-tinybvh`, tinybvh's BVH8_CPU (needs
@@ -11,7 +13,8 @@
 //! and diffuse bounces (closest hit, incoherent).
 //!
 //! The comparison table's rows are the peers' and ours that "our best" is taken over: the BVH4 and the
-//! BVH8 on the instruction set `auto` picks, single rays and packets (`contestant::table_structures`).
+//! BVH8 on the instruction set `auto` picks, single rays, packets and hybrid packets
+//! (`contestant::table_structures`).
 //! Every contestant runs on one thread; on all threads, those rows alone. `cargo bench --bench kernels
 //! -- table` runs the table's rows alone, on one thread: `table` is this bench's name for them (as
 //! criterion's regex it would match no id), and of the other contestants only the grid, the reference,

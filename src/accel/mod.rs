@@ -24,7 +24,7 @@ pub mod wide;
 use std::marker::PhantomData;
 use std::str::FromStr;
 
-pub use packet::{HitPacket, PACKET, RayPacket};
+pub use packet::{HitPacket, PACKET, RayPacket, coherent_rays};
 pub use prims::{Hit, PrimKind, Prims, Surface};
 pub use structure::Structure;
 pub use wide::Isa;

@@ -19,7 +19,7 @@ use super::shade::{HitLanes, light};
 use super::spd::Spawning;
 use super::stats::{Count, RayKind, SampleRays};
 use crate::accel::lanes::Lanes8;
-use crate::accel::{Accel, Hit, PACKET, Prims, Tally, Verbs};
+use crate::accel::{Accel, Hit, PACKET, Prims, Tally, Verbs, coherent_rays};
 use crate::geometry::ray::Ray;
 use crate::scene::{QuadLight, Scene};
 
@@ -48,10 +48,6 @@ const FUZZ_TRIES: u32 = 16;
 /// at the usual depths are untouched (the default of 6 spawns at most 126). A sample's rays are counted
 /// in the same depth-first order whatever its lane count, so every kernel cuts the same branches.
 const SPLIT_BUDGET: u64 = 1024;
-
-/// Spawned rays with fewer live lanes than this go ray by ray: a packet's node tests cost about as
-/// much for one ray as for eight.
-const MIN_LANES: u32 = 2;
 
 /// The integrator of one frame: the scene, the structure that answers its rays, what a ray that leaves
 /// the scene sees, the light samples and each material's roughness; shared read-only by the workers.
@@ -213,7 +209,7 @@ impl<'a> Whitted<'a> {
         kind: RayKind,
         samples: &mut [PixelSample<C>; N],
     ) -> V3<L, N> {
-        if N == 1 || coherent(each::<N>(mask).map(|k| &rays[k])) {
+        if N == 1 || coherent_rays(each::<N>(mask).map(|k| &rays[k])) {
             return self.trace_lanes(rays, mask, depth, kind, samples);
         }
         let mut out = [Vec3::ZERO; N];
@@ -416,23 +412,6 @@ fn blocked_tallied<C: Count, L: Width<N>, const N: usize>(
 #[inline]
 fn budget_spent(rays: &SampleRays) -> bool {
     rays.reflected + rays.refracted >= SPLIT_BUDGET
-}
-
-/// Whether `rays` (up to a packet's worth) are worth tracing together: at least [`MIN_LANES`] of
-/// them, their directions all in one octant.
-fn coherent<'r>(mut rays: impl Iterator<Item = &'r Ray>) -> bool {
-    let octant = |r: &Ray| r.dir.cmplt(Vec3::ZERO).bitmask();
-    let Some(first) = rays.next().map(octant) else {
-        return false;
-    };
-    let mut n = 1;
-    for r in rays {
-        if octant(r) != first {
-            return false;
-        }
-        n += 1;
-    }
-    n >= MIN_LANES
 }
 
 /// A fuzzy reflection (the course's glossy mirror; Shirley's "fuzz"): the mirror direction plus a
