@@ -197,19 +197,18 @@ fn run(name: &str) -> Result<(), String> {
 /// `None` for a name that is not a packet loop.
 fn packets(base: &str, w: &Workload, accel: &Accel) -> Option<(usize, usize)> {
     let unbounded = |rays: &[Ray]| rays.iter().map(|r| (*r, f32::INFINITY)).collect::<Vec<_>>();
-    start_instrumentation();
-    Some(match base {
-        "packet-primary" => (
-            w.primary.len(),
-            measured_packets::<false>(accel, &unbounded(&w.primary)),
-        ),
-        "packet-shadow" => (w.shadow.len(), measured_packets::<true>(accel, &w.shadow)),
-        "packet-diffuse" => (
-            w.diffuse.len(),
-            measured_packets::<false>(accel, &unbounded(&w.diffuse)),
-        ),
+    let (rays, any) = match base {
+        "packet-primary" => (unbounded(&w.primary), false),
+        "packet-shadow" => (w.shadow.clone(), true),
+        "packet-diffuse" => (unbounded(&w.diffuse), false),
         _ => return None,
-    })
+    };
+    start_instrumentation();
+    let hits = match any {
+        true => measured_packets::<true>(accel, &rays),
+        false => measured_packets::<false>(accel, &rays),
+    };
+    Some((rays.len(), hits))
 }
 
 /// The single-ray loop `base` (the loop `name` less its structure's suffix) over the workload `w` with a
