@@ -111,6 +111,28 @@ fn is_space(b: u8) -> bool {
     matches!(b, b' ' | b'\t' | b'\r' | b'\n' | 0x0b | 0x0c)
 }
 
+/// Whether the [`Lexer`] finds a token in `line` (a line without its line break): something other
+/// than white space before any comment.
+pub fn holds_token(line: &[u8]) -> bool {
+    line.iter().find(|&&b| !is_space(b)).is_some_and(|&b| b != b'#')
+}
+
+/// Where a byte lies in a text: its offset from the start, its line and its column.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Position {
+    pub offset: u64,
+    pub line: u64,
+    pub col: u64,
+}
+
+/// What a [`Lexer`] has not read yet: the bytes it read ahead, then the rest of its reader.
+pub struct Rest {
+    pub bytes: Vec<u8>,
+    pub reader: Box<dyn Read + Send>,
+    /// The position of the first byte.
+    pub at: Position,
+}
+
 impl Lexer {
     /// Opens `path` (gzipped or not) for tokenizing.
     pub fn open(path: &Path) -> Result<Self> {
@@ -131,6 +153,28 @@ impl Lexer {
             line: 1,
             line_start: 0,
             peeked: None,
+        }
+    }
+
+    /// Reads `reader` as the text that goes on from `at` (no byte-order mark is looked for).
+    pub fn resume(path: &Path, reader: Box<dyn Read + Send>, at: Position) -> Self {
+        let mut lx = Self::new(path, reader);
+        lx.started = true;
+        lx.consumed = at.offset;
+        lx.line = at.line;
+        lx.line_start = at.offset - (at.col - 1);
+        lx
+    }
+
+    /// What is left to read, for another lexer to [`resume`](Lexer::resume).
+    pub fn into_rest(self) -> Rest {
+        debug_assert!(self.peeked.is_none(), "into_rest after peek");
+        let (line, col) = self.position();
+        let offset = self.offset();
+        Rest {
+            bytes: self.buf[self.pos..self.end].to_vec(),
+            reader: self.reader,
+            at: Position { offset, line, col },
         }
     }
 
@@ -395,8 +439,22 @@ impl Lexer {
     }
 
     /// Reads raw bytes (binary PLY after its header). Returns false if the data ends first.
+    #[inline]
     pub fn read_exact(&mut self, out: &mut [u8]) -> Result<bool> {
         debug_assert!(self.peeked.is_none(), "read_exact after peek");
+        // Most reads are a value of a few bytes that the buffer holds.
+        match self.buf[self.pos..self.end].get(..out.len()) {
+            Some(bytes) => {
+                out.copy_from_slice(bytes);
+                self.pos += out.len();
+                Ok(true)
+            }
+            None => self.read_across(out),
+        }
+    }
+
+    /// [`Lexer::read_exact`] across the end of the buffer.
+    fn read_across(&mut self, out: &mut [u8]) -> Result<bool> {
         let mut filled = 0;
         while filled < out.len() {
             if self.pos == self.end && !self.refill(self.pos)? {

@@ -50,6 +50,21 @@ impl MeshData {
             self.normal_triangles.push(normals);
         }
     }
+
+    /// Appends `part`, read apart from this mesh: its vertices after this mesh's, its triangles as they
+    /// are (they index the vertices of both).
+    fn append(&mut self, part: MeshData) {
+        self.positions.extend_from_slice(&part.positions);
+        self.normals.extend_from_slice(&part.normals);
+        if !(self.normal_triangles.is_empty() && part.normal_triangles.is_empty()) {
+            // Either side may have no smooth triangle, and so no list: its triangles are flat.
+            self.normal_triangles.resize(self.triangles.len(), None);
+            self.normal_triangles.extend_from_slice(&part.normal_triangles);
+            let count = self.triangles.len() + part.triangles.len();
+            self.normal_triangles.resize(count, None);
+        }
+        self.triangles.extend_from_slice(&part.triangles);
+    }
 }
 
 /// `n` scaled to unit length, or zero if it has none. Dividing by the largest component first keeps
@@ -122,8 +137,13 @@ impl Format {
 
 /// Loads a PLY or OBJ mesh (gzipped or not).
 pub fn load_mesh(path: &Path) -> Result<MeshData> {
+    load_mesh_on(path, ply::Threads::All)
+}
+
+/// [`load_mesh`], a PLY body read on `threads`.
+pub fn load_mesh_on(path: &Path, threads: ply::Threads) -> Result<MeshData> {
     match Format::of(path) {
-        Some(Format::Ply) => ply::load(path),
+        Some(Format::Ply) => ply::load_on(path, threads),
         Some(Format::Obj) => obj::load(path),
         _ => Err(Error::file(
             path,

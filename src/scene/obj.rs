@@ -28,6 +28,9 @@ pub fn load(path: &Path) -> Result<MeshData> {
 pub fn parse(path: &Path, reader: Box<dyn Read + Send>) -> Result<MeshData> {
     let mut lx = Lexer::new(path, reader);
     let mut mesh = MeshData::default();
+    // The triangles apart from the vertices they index, so that a face reads the one while it adds to
+    // the other.
+    let mut faces = MeshData::default();
     let mut polygons = Polygons::default();
     let mut face = Face::default();
     while let Some(tok) = lx.next_token()? {
@@ -49,17 +52,18 @@ pub fn parse(path: &Path, reader: Box<dyn Read + Send>) -> Result<MeshData> {
                 read_face(&mut lx, &tok, &mesh, &mut face)?;
                 // Corners without normals beside ones with: the face is flat, as if none had one.
                 let normals = (face.normals.len() == face.positions.len()).then_some(&face.normals[..]);
-                polygons.push(&mut mesh, &face.positions, normals);
+                polygons.push(&mesh, &mut faces, &face.positions, normals);
             }
             _ => lx.skip_line()?,
         }
     }
-    if mesh.triangles.is_empty() {
+    if faces.triangles.is_empty() {
         return Err(Error::file(
             path,
             "expected at least one face (an \"f\" line), found none",
         ));
     }
+    mesh.append(faces);
     Ok(mesh)
 }
 

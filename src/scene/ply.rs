@@ -1,13 +1,15 @@
 //! Stanford PLY meshes: ascii and binary (either byte order), gzipped or not.
 //!
 //! The header is read with the text [`Lexer`]; the body streams through it too, token by token (ascii) or
-//! value by value (binary), so memory stays at the size of the mesh itself whatever counts a header claims.
+//! value by value (binary), in pieces read side by side (`split`), so memory stays at the size of the mesh
+//! and a few windows of text whatever counts a header claims.
 //! Only the `vertex` x, y, z (and nx, ny, nz, the normals for smooth shading, when there are all three) and
 //! the `face` vertex indices are kept; every other element and property is read and dropped, so that the
 //! files of scanners (confidence, intensity, edges, materials) load as they are.
 
 use std::fmt;
 use std::io::Read;
+use std::ops::Range;
 use std::path::Path;
 
 use glam::Vec3;
@@ -28,35 +30,37 @@ const FORMATS: &str = "\"format ascii 1.0\", \"binary_little_endian 1.0\" or \"b
 ///
 /// Errors say where: `path:line:col` in the header and in an ascii body, `path: byte N` in a binary body.
 pub fn load(path: &Path) -> Result<MeshData> {
-    parse(path, lex::open(path)?)
+    load_on(path, Threads::All)
+}
+
+/// [`load`] on `threads`.
+pub fn load_on(path: &Path, threads: Threads) -> Result<MeshData> {
+    read(path, lex::open(path)?, threads)
 }
 
 /// Parses a PLY mesh from `reader` (decompressed); `path` names it in errors.
 pub fn parse(path: &Path, reader: Box<dyn Read + Send>) -> Result<MeshData> {
+    read(path, reader, Threads::All)
+}
+
+/// The threads that read a body: all of the current pool's, in pieces, or the calling one alone, where
+/// the others have meshes of their own to read and cutting would only add work.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Threads {
+    All,
+    One,
+}
+
+fn read(path: &Path, reader: Box<dyn Read + Send>, threads: Threads) -> Result<MeshData> {
     let mut lx = Lexer::new(path, reader);
     let header = read_header(&mut lx)?;
-    match header.format {
-        Format::Ascii => {
-            let mut body = Ascii {
-                lx: &mut lx,
-                new_row: true,
-                // Data on the `end_header` line is an extra value, like data after a row.
-                row_line: header.end_line,
-                last_col: 0,
-                end_col: 0,
-            };
-            read_body(&mut body, &header)
-        }
-        Format::Binary { big_endian } => {
-            // The body starts right after the line break of `end_header`.
-            lx.skip_line()?;
-            let mut body = Binary {
-                lx: &mut lx,
-                big_endian,
-                last: 0,
-            };
-            read_body(&mut body, &header)
-        }
+    if let Format::Binary { .. } = header.format {
+        // The body starts right after the line break of `end_header`.
+        lx.skip_line()?;
+    }
+    match threads {
+        Threads::All => split::read(lx, &header),
+        Threads::One => split::read_whole(lx, &header),
     }
 }
 
@@ -69,24 +73,30 @@ pub(super) struct Polygons {
 }
 
 impl Polygons {
-    /// Appends the triangles of the polygon `indices` (at least 3, each in range of `mesh.positions`) to
-    /// `mesh`. `normals` are the corners' indices into `mesh.normals` (in range too); they are kept only if
-    /// every corner's normal is non-zero, so that a face is smooth or flat as a whole.
-    pub(super) fn push(&mut self, mesh: &mut MeshData, indices: &[u32], normals: Option<&[u32]>) {
-        let normals = normals.filter(|n| n.iter().all(|&i| mesh.normals[i as usize] != Vec3::ZERO));
+    /// Appends the triangles of the polygon `indices` (at least 3, each in range of `vertices.positions`)
+    /// to `out`. `normals` are the corners' indices into `vertices.normals` (in range too); they are kept
+    /// only if every corner's normal is non-zero, so that a face is smooth or flat as a whole.
+    pub(super) fn push(
+        &mut self,
+        vertices: &MeshData,
+        out: &mut MeshData,
+        indices: &[u32],
+        normals: Option<&[u32]>,
+    ) {
+        let normals = normals.filter(|n| n.iter().all(|&i| vertices.normals[i as usize] != Vec3::ZERO));
         self.local.clear();
         if indices.len() == 3 {
             self.local.push([0, 1, 2]);
         } else {
             self.points.clear();
             self.points
-                .extend(indices.iter().map(|&i| mesh.positions[i as usize]));
+                .extend(indices.iter().map(|&i| vertices.positions[i as usize]));
             triangulate(&self.points, &mut self.local);
         }
         // `triangulate` numbers the polygon's own corners; map them back to the mesh's vertices and normals.
         for t in &self.local {
-            mesh.triangles.push(t.map(|k| indices[k as usize]));
-            mesh.push_normals(normals.map(|n| t.map(|k| n[k as usize])));
+            out.triangles.push(t.map(|k| indices[k as usize]));
+            out.push_normals(normals.map(|n| t.map(|k| n[k as usize])));
         }
     }
 }
@@ -128,12 +138,57 @@ impl Scalar {
     fn is_integer(self) -> bool {
         !matches!(self, Scalar::F32 | Scalar::F64)
     }
+
+    /// Bytes a value takes in a binary body.
+    fn size(self) -> usize {
+        match self {
+            Scalar::I8 | Scalar::U8 => 1,
+            Scalar::I16 | Scalar::U16 => 2,
+            Scalar::I32 | Scalar::U32 | Scalar::F32 => 4,
+            Scalar::F64 => 8,
+        }
+    }
+
+    /// The value of `bytes` (exactly [`Scalar::size`] of them) as `f64`, which holds every integer type
+    /// exactly.
+    fn decode(self, bytes: &[u8], big_endian: bool) -> f64 {
+        macro_rules! decode {
+            ($t:ty) => {{
+                let bytes = bytes.try_into().expect("a value's bytes");
+                (if big_endian {
+                    <$t>::from_be_bytes(bytes)
+                } else {
+                    <$t>::from_le_bytes(bytes)
+                }) as f64
+            }};
+        }
+        match self {
+            Scalar::I8 => decode!(i8),
+            Scalar::U8 => decode!(u8),
+            Scalar::I16 => decode!(i16),
+            Scalar::U16 => decode!(u16),
+            Scalar::I32 => decode!(i32),
+            Scalar::U32 => decode!(u32),
+            Scalar::F32 => decode!(f32),
+            Scalar::F64 => decode!(f64),
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug)]
 enum Kind {
     Scalar(Scalar),
     List { count: Scalar, item: Scalar },
+}
+
+impl Kind {
+    /// Bytes a value takes in a binary body, if that does not depend on a list's length.
+    fn size(self) -> Option<usize> {
+        match self {
+            Kind::Scalar(ty) => Some(ty.size()),
+            Kind::List { .. } => None,
+        }
+    }
 }
 
 /// What the reader does with a property.
@@ -175,7 +230,6 @@ struct Header {
     face: usize,
     /// The vertex element has nx, ny and nz.
     normals: bool,
-    end_line: u64,
 }
 
 fn read_header(lx: &mut Lexer) -> Result<Header> {
@@ -379,7 +433,6 @@ fn check_header(lx: &Lexer, format: Format, mut elements: Vec<Element>, end: Tok
         vertex,
         face,
         normals,
-        end_line: end.line,
     })
 }
 
@@ -434,35 +487,64 @@ trait Body {
     fn finish(&mut self) -> Result<()>;
 }
 
-/// Reads every element in the order of the header.
-fn read_body(body: &mut impl Body, header: &Header) -> Result<MeshData> {
-    let mut mesh = MeshData::default();
-    for (index, element) in header.elements.iter().enumerate() {
-        if index == header.vertex {
-            read_vertices(body, element, header.normals, &mut mesh)?;
-        } else if index == header.face {
-            read_faces(body, element, header.normals, &mut mesh)?;
-        } else {
-            for row in 0..element.count {
-                body.start_row();
-                for prop in &element.props {
-                    skip_property(body, element, prop, row)?;
-                }
-            }
-        }
-    }
-    body.finish()?;
-    Ok(mesh)
+/// Where a part of the body starts: an element of the header, and a row of it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct RowAt {
+    element: usize,
+    row: u64,
 }
 
-/// The positions and, if the header has them, the normals of the vertices.
-fn read_vertices(body: &mut impl Body, element: &Element, normals: bool, mesh: &mut MeshData) -> Result<()> {
-    let reserve = element.count.min(MAX_RESERVE) as usize;
+/// The body from `from` to its end, appended to `mesh`, and the check that nothing follows it.
+fn read_rest(body: &mut impl Body, header: &Header, from: RowAt, mesh: &mut MeshData) -> Result<()> {
+    for (index, element) in header.elements.iter().enumerate().skip(from.element) {
+        let first = if index == from.element { from.row } else { 0 };
+        let mut part = MeshData::default();
+        read_rows(body, header, index, first..element.count, mesh, &mut part)?;
+        mesh.append(part);
+    }
+    body.finish()
+}
+
+/// The rows `rows` of element `index`, appended to `out`. A face's vertices are those of `vertices`,
+/// which holds all of them by then (the header puts the vertex element first).
+fn read_rows(
+    body: &mut impl Body,
+    header: &Header,
+    index: usize,
+    rows: Range<u64>,
+    vertices: &MeshData,
+    out: &mut MeshData,
+) -> Result<()> {
+    let element = &header.elements[index];
+    if index == header.vertex {
+        read_vertices(body, element, rows, header.normals, out)
+    } else if index == header.face {
+        read_faces(body, element, rows, header.normals, vertices, out)
+    } else {
+        for row in rows {
+            body.start_row();
+            for prop in &element.props {
+                skip_property(body, element, prop, row)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The positions and, if the header has them, the normals of the vertices `rows`.
+fn read_vertices(
+    body: &mut impl Body,
+    element: &Element,
+    rows: Range<u64>,
+    normals: bool,
+    mesh: &mut MeshData,
+) -> Result<()> {
+    let reserve = (rows.end - rows.start).min(MAX_RESERVE) as usize;
     mesh.positions.reserve(reserve);
     if normals {
         mesh.normals.reserve(reserve);
     }
-    for row in 0..element.count {
+    for row in rows {
         body.start_row();
         let mut p = Vec3::ZERO;
         let mut n = Vec3::ZERO;
@@ -493,14 +575,22 @@ fn read_vertices(body: &mut impl Body, element: &Element, normals: bool, mesh: &
     Ok(())
 }
 
-/// The faces, triangulated; with per-vertex normals (`normals`), a face's normal indices are its vertex
-/// indices.
-fn read_faces(body: &mut impl Body, element: &Element, normals: bool, mesh: &mut MeshData) -> Result<()> {
-    mesh.triangles.reserve(element.count.min(MAX_RESERVE) as usize);
-    let vertex_count = mesh.positions.len() as i64;
+/// The faces `rows` of `vertices`, triangulated into `out`; with per-vertex normals (`normals`), a face's
+/// normal indices are its vertex indices.
+fn read_faces(
+    body: &mut impl Body,
+    element: &Element,
+    rows: Range<u64>,
+    normals: bool,
+    vertices: &MeshData,
+    out: &mut MeshData,
+) -> Result<()> {
+    out.triangles
+        .reserve((rows.end - rows.start).min(MAX_RESERVE) as usize);
+    let vertex_count = vertices.positions.len() as i64;
     let mut polygons = Polygons::default();
     let mut indices: Vec<u32> = Vec::new();
-    for row in 0..element.count {
+    for row in rows {
         body.start_row();
         for prop in &element.props {
             match (prop.role, prop.kind) {
@@ -521,7 +611,7 @@ fn read_faces(body: &mut impl Body, element: &Element, normals: bool, mesh: &mut
                         }
                         indices.push(index as u32);
                     }
-                    polygons.push(mesh, &indices, normals.then_some(&indices[..]));
+                    polygons.push(vertices, out, &indices, normals.then_some(&indices[..]));
                 }
                 _ => skip_property(body, element, prop, row)?,
             }
@@ -555,9 +645,11 @@ fn skip_property(body: &mut impl Body, element: &Element, prop: &Property, row: 
     }
 }
 
-/// An ascii body: one element per line, values separated by spaces.
+/// An ascii body, or a part of one: one element per line, values separated by spaces.
 struct Ascii<'a> {
     lx: &'a mut Lexer,
+    /// More of the body follows the lexer's text (a piece cut at a line end): its end is a line's end.
+    more: bool,
     /// The next token starts a new element, and so must be on a later line.
     new_row: bool,
     /// The line of the current element.
@@ -567,36 +659,68 @@ struct Ascii<'a> {
     end_col: u64,
 }
 
-impl Ascii<'_> {
+impl<'a> Ascii<'a> {
+    /// The body from the lexer's position on: the start of a line, or the rest of the `end_header` line,
+    /// where data is an extra value, like data after a row.
+    fn new(lx: &'a mut Lexer, more: bool) -> Self {
+        let (line, col) = lx.position();
+        Ascii {
+            lx,
+            more,
+            new_row: true,
+            row_line: if col > 1 { line } else { line - 1 },
+            last_col: 0,
+            end_col: 0,
+        }
+    }
+
     /// The next token, which must be on the line of the current element (a new one for a new element):
     /// that way a row with a missing or an extra value is reported on its own line, not where the counts
     /// run out many lines later.
     fn token(&mut self, what: fmt::Arguments) -> Result<Tok> {
-        let Some(tok) = self.lx.next_token()? else {
-            return Err(self
-                .lx
-                .error_here(format!("expected {what}, found the end of the file")));
-        };
-        if self.new_row {
-            if tok.line == self.row_line {
-                return Err(self.lx.error_at(
-                    &tok,
-                    format!("expected the end of the line, found {}", show(self.lx.text(&tok))),
-                ));
+        match self.lx.next_token()? {
+            Some(tok) if self.new_row => {
+                if tok.line == self.row_line {
+                    return Err(self.extra(&tok));
+                }
+                self.row_line = tok.line;
+                self.new_row = false;
+                self.accept(tok)
             }
-            self.row_line = tok.line;
-            self.new_row = false;
-        } else if tok.line != self.row_line {
-            return Err(Error::at(
+            Some(tok) if tok.line == self.row_line => self.accept(tok),
+            None if !self.more => Err(self
+                .lx
+                .error_here(format!("expected {what}, found the end of the file"))),
+            _ => Err(Error::at(
                 self.lx.path(),
                 self.row_line,
                 self.end_col,
                 format!("expected {what}, found the end of the line"),
-            ));
+            )),
         }
+    }
+
+    fn accept(&mut self, tok: Tok) -> Result<Tok> {
         self.last_col = tok.col;
         self.end_col = tok.col + self.lx.text(&tok).len() as u64;
         Ok(tok)
+    }
+
+    /// A token on the line of the element read last.
+    fn extra(&self, tok: &Tok) -> Error {
+        self.lx.error_at(
+            tok,
+            format!("expected the end of the line, found {}", show(self.lx.text(tok))),
+        )
+    }
+
+    /// Checks that the last row of a piece ends its line. A piece holds as many lines with tokens as it
+    /// has rows, so a token left is on that line.
+    fn end_piece(&mut self) -> Result<()> {
+        match self.lx.next_token()? {
+            Some(tok) => Err(self.extra(&tok)),
+            None => Ok(()),
+        }
     }
 
     fn found(&self, tok: &Tok, expected: fmt::Arguments) -> Error {
@@ -659,39 +783,24 @@ struct Binary<'a> {
     last: u64,
 }
 
-impl Binary<'_> {
-    fn bytes<const N: usize>(&mut self, what: fmt::Arguments) -> Result<[u8; N]> {
-        self.last = self.lx.offset();
-        let mut bytes = [0; N];
-        if self.lx.read_exact(&mut bytes)? {
-            Ok(bytes)
-        } else {
-            Err(self.error(format!("expected {what}, found the end of the file")))
+impl<'a> Binary<'a> {
+    fn new(lx: &'a mut Lexer, big_endian: bool) -> Self {
+        Binary {
+            lx,
+            big_endian,
+            last: 0,
         }
     }
 
-    /// Any value as `f64`, which holds every integer type exactly.
     fn value(&mut self, ty: Scalar, what: fmt::Arguments) -> Result<f64> {
-        macro_rules! read {
-            ($t:ty) => {{
-                let bytes = self.bytes(what)?;
-                (if self.big_endian {
-                    <$t>::from_be_bytes(bytes)
-                } else {
-                    <$t>::from_le_bytes(bytes)
-                }) as f64
-            }};
+        self.last = self.lx.offset();
+        let mut bytes = [0; 8];
+        let bytes = &mut bytes[..ty.size()];
+        if self.lx.read_exact(bytes)? {
+            Ok(ty.decode(bytes, self.big_endian))
+        } else {
+            Err(self.error(format!("expected {what}, found the end of the file")))
         }
-        Ok(match ty {
-            Scalar::I8 => read!(i8),
-            Scalar::U8 => read!(u8),
-            Scalar::I16 => read!(i16),
-            Scalar::U16 => read!(u16),
-            Scalar::I32 => read!(i32),
-            Scalar::U32 => read!(u32),
-            Scalar::F32 => read!(f32),
-            Scalar::F64 => read!(f64),
-        })
     }
 }
 
@@ -728,5 +837,6 @@ impl Body for Binary<'_> {
     }
 }
 
+mod split;
 #[cfg(test)]
 mod tests;

@@ -103,11 +103,40 @@ fn gzip(bytes: &[u8]) -> Vec<u8> {
     encoder.finish().unwrap()
 }
 
+/// Loads `bytes` as a file. The body is also read whole on one thread (window 0 in a failure), and in
+/// windows of a few bytes, cut into many pieces, which must give the same mesh or the same error.
 fn load_bytes(bytes: &[u8]) -> Result<MeshData> {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("mesh.ply");
     std::fs::write(&path, bytes).unwrap();
-    load(&path)
+    let whole = load(&path);
+    assert_same(&whole, &load_on(&path, Threads::One), 0);
+    for window in [1, 2, 3, 5, 8, 13, 40, 100, 1000] {
+        if let Some(cut) = load_in_windows(&path, window) {
+            assert_same(&whole, &cut, window);
+        }
+    }
+    whole
+}
+
+/// `path` read with its body cut into windows of `window` bytes; `None` where the header is wrong.
+fn load_in_windows(path: &Path, window: usize) -> Option<Result<MeshData>> {
+    let mut lx = Lexer::open(path).unwrap();
+    let header = read_header(&mut lx).ok()?;
+    if header.format != Format::Ascii && lx.skip_line().is_err() {
+        return None;
+    }
+    Some(split::read_in_windows(lx, &header, window))
+}
+
+#[track_caller]
+fn assert_same(whole: &Result<MeshData>, cut: &Result<MeshData>, window: usize) {
+    match (whole, cut) {
+        (Ok(a), Ok(b)) => assert!(a == b, "window {window}: the meshes differ"),
+        (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string(), "window {window}"),
+        (Ok(_), Err(e)) => panic!("window {window}: read whole, but in pieces: {e}"),
+        (Err(e), Ok(_)) => panic!("window {window}: read in pieces, but whole: {e}"),
+    }
 }
 
 fn load_text(text: &str) -> Result<MeshData> {
@@ -567,4 +596,236 @@ fn stanford_dragon_full() {
     assert_eq!(mesh.positions.len(), 437_645);
     assert_eq!(mesh.triangles.len(), 871_414);
     check_indices(&mesh);
+}
+
+/// The header of the many-row test mesh: vertices with normals, an element without properties and one
+/// that is skipped between them and the faces, and a face property after the indices.
+fn many_rows_header(vertices: usize, faces: usize) -> String {
+    header("ascii", &many_rows_elements(vertices, faces))
+}
+
+fn many_rows_elements(vertices: usize, faces: usize) -> String {
+    format!(
+        "element vertex {vertices}\nproperty float x\nproperty float y\nproperty float z\n\
+         property float nx\nproperty float ny\nproperty float nz\nelement empty 7\n\
+         element edge 3\nproperty int a\nproperty int b\nelement face {faces}\n\
+         property list uchar int vertex_indices\nproperty uchar flag\nend_header\n"
+    )
+}
+
+/// The many-row test mesh in binary.
+fn many_rows_binary(vertices: usize, faces: usize, big_endian: bool) -> Vec<u8> {
+    use V::*;
+    let mut rows = Vec::new();
+    for i in 0..vertices {
+        let (p, n) = (many_rows_position(i), many_rows_normal(i) * (i % 3 + 1) as f32);
+        rows.push([p.x, p.y, p.z, n.x, n.y, n.z].map(F32).to_vec());
+    }
+    rows.extend([[0, 1], [2, 3], [4, 5]].map(|e| e.map(I32).to_vec()));
+    for j in 0..faces {
+        let corners = many_rows_face(j, vertices);
+        let mut row = vec![U8(corners.len() as u8)];
+        row.extend(corners.iter().map(|&c| I32(c as i32)));
+        row.push(U8((j % 3) as u8));
+        rows.push(row);
+    }
+    binary_with(&many_rows_elements(vertices, faces), &rows, big_endian)
+}
+
+fn many_rows_position(i: usize) -> Vec3 {
+    Vec3::new(i as f32 * 0.5, (i % 7) as f32, (i % 13) as f32 * 0.25)
+}
+
+/// Every fifth vertex has a zero normal, which makes its faces flat.
+fn many_rows_normal(i: usize) -> Vec3 {
+    if i.is_multiple_of(5) { Vec3::ZERO } else { Vec3::Z }
+}
+
+/// Face `j`'s corners: a quad for every tenth, a triangle otherwise.
+fn many_rows_face(j: usize, vertices: usize) -> Vec<usize> {
+    let corners = if j.is_multiple_of(10) { 4 } else { 3 };
+    (0..corners).map(|k| (j * 3 + k) % vertices).collect()
+}
+
+/// A body of thousands of rows, with comments, blank lines, white space of every kind, an element
+/// without properties and a skipped one, read in windows of many sizes: the pieces join into the
+/// mesh that was written.
+#[test]
+fn a_body_cut_into_pieces_reads_as_written() {
+    let (vertices, faces) = (3000, 2000);
+    let mut text = many_rows_header(vertices, faces);
+    for i in 0..vertices {
+        let (p, n) = (many_rows_position(i), many_rows_normal(i));
+        // Normals of any length are made unit ones.
+        let scale = (i % 3 + 1) as f32;
+        text.push_str(&format!(
+            "{} {}\t{} {} {} {}\n",
+            p.x,
+            p.y,
+            p.z,
+            n.x * scale,
+            n.y,
+            n.z * scale
+        ));
+        if i.is_multiple_of(97) {
+            text.push_str("# a comment line\n\n   \t\r\n");
+        }
+    }
+    text.push_str("0 1\n  2 3 # an edge\n4 5\r\n");
+    for j in 0..faces {
+        let corners = many_rows_face(j, vertices);
+        let list: Vec<String> = corners.iter().map(usize::to_string).collect();
+        text.push_str(&format!("{} {} {}\n", corners.len(), list.join(" "), j % 3));
+    }
+    text.push_str("# the end\n\n");
+
+    let mut triangles = 0;
+    let check = |mesh: &MeshData, what: &str| {
+        assert_eq!(mesh.positions.len(), vertices, "{what}");
+        for i in 0..vertices {
+            assert_eq!(mesh.positions[i], many_rows_position(i), "{what}: vertex {i}");
+            assert_eq!(mesh.normals[i], many_rows_normal(i), "{what}: normal {i}");
+        }
+        let mut t = 0;
+        for j in 0..faces {
+            let corners = many_rows_face(j, vertices);
+            let smooth = corners.iter().all(|&c| many_rows_normal(c) != Vec3::ZERO);
+            let count = corners.len() - 2;
+            let got = &mesh.triangles[t..t + count];
+            let corners: Vec<u32> = corners.iter().map(|&c| c as u32).collect();
+            if count == 1 {
+                assert_eq!(got[0], [corners[0], corners[1], corners[2]], "{what}: face {j}");
+            } else {
+                assert_quad_split(got, corners[..].try_into().unwrap());
+            }
+            for k in t..t + count {
+                let want = smooth.then_some(mesh.triangles[k]);
+                assert_eq!(mesh.normal_triangles[k], want, "{what}: face {j}");
+            }
+            t += count;
+        }
+        assert_eq!(mesh.triangles.len(), t, "{what}");
+        t
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("many.ply");
+    let bodies = [
+        ("ascii", text.into_bytes()),
+        ("little endian", many_rows_binary(vertices, faces, false)),
+        ("big endian", many_rows_binary(vertices, faces, true)),
+    ];
+    for (format, bytes) in bodies {
+        std::fs::write(&path, &bytes).unwrap();
+        for window in [30, 64, 500, 4096, 1 << 16] {
+            let mesh = load_in_windows(&path, window).unwrap().unwrap();
+            triangles = check(&mesh, &format!("{format}, window {window}"));
+        }
+        // 200 quads of two triangles, 1,800 triangles.
+        assert_eq!(triangles, 2200);
+        check(&load_bytes(&bytes).unwrap(), format);
+    }
+}
+
+/// A wrong value in any row of a binary body cut into pieces is reported at its byte, with the error a
+/// reading of the whole gives (`load_bytes` compares them); so is a body cut short anywhere.
+#[test]
+fn an_error_in_any_binary_piece_is_reported_where_it_is() {
+    let (vertices, faces) = (40, 30);
+    let bytes = many_rows_binary(vertices, faces, false);
+    let body = bytes.len() - (vertices * 24 + 3 * 8 + faces * 2 + 4 * (faces * 3 + 3));
+    for i in 0..vertices {
+        let mut wrong = bytes.clone();
+        let at = body + i * 24 + 4;
+        wrong[at..at + 4].copy_from_slice(&f32::NAN.to_le_bytes());
+        let e = load_bytes(&wrong).unwrap_err();
+        let want = format!("expected a finite number for the y coordinate of vertex {i}, found NaN");
+        assert_eq!((e.message, e.location), (want, Location::Byte(at as u64)));
+    }
+    let mut at = body + vertices * 24 + 3 * 8;
+    for j in 0..faces {
+        let mut wrong = bytes.clone();
+        let corners = many_rows_face(j, vertices).len();
+        wrong[at + 1..at + 5].copy_from_slice(&99i32.to_le_bytes());
+        let e = load_bytes(&wrong).unwrap_err();
+        let want = "expected a vertex index below 40, found 99".to_string();
+        assert_eq!(
+            (e.message, e.location),
+            (want, Location::Byte(at as u64 + 1)),
+            "face {j}"
+        );
+        at += 2 + 4 * corners;
+    }
+    assert_eq!(at, bytes.len());
+    for end in (body..bytes.len()).step_by(5) {
+        let e = load_bytes(&bytes[..end]).unwrap_err();
+        assert!(e.message.ends_with("found the end of the file"), "{e}");
+    }
+    let e = load_bytes(&[&bytes[..], b"x"].concat()).unwrap_err();
+    assert_eq!(e.location, Location::Byte(bytes.len() as u64));
+    // A list of negative length cannot be sized: the body from there is read as a whole.
+    let mut signed = bytes.clone();
+    let list = bytes.windows(5).position(|w| w == b"uchar").unwrap();
+    signed[list..list + 5].copy_from_slice(b" char");
+    let last = bytes.len() - 2 - 4 * 3;
+    signed[last] = (-1i8) as u8;
+    let e = load_bytes(&signed).unwrap_err();
+    assert_eq!(
+        e.message,
+        "expected 3 or more vertex indices in face 29, found -1"
+    );
+}
+
+/// A wrong line anywhere in a body cut into pieces is reported on that line, with the error a reading
+/// of the whole gives (`load_bytes` compares them), whichever piece holds it.
+#[test]
+fn an_error_in_any_piece_is_reported_on_its_line() {
+    let (vertices, faces) = (40, 30);
+    let header = many_rows_header(vertices, faces);
+    let header_lines = header.lines().count();
+    let mut lines: Vec<String> = Vec::new();
+    for i in 0..vertices {
+        let p = many_rows_position(i);
+        lines.push(format!("{} {} {} 0 0 1", p.x, p.y, p.z));
+    }
+    lines.extend(["0 1", "2 3", "4 5"].map(String::from));
+    for j in 0..faces {
+        let corners = many_rows_face(j, vertices);
+        let list: Vec<String> = corners.iter().map(usize::to_string).collect();
+        lines.push(format!("{} {} 0", corners.len(), list.join(" ")));
+    }
+    let file = |lines: &[String]| format!("{header}{}\n", lines.join("\n"));
+    assert_eq!(load_text(&file(&lines)).unwrap().positions.len(), vertices);
+    for k in 0..lines.len() {
+        let line = (header_lines + k + 1) as u64;
+        let mut wrong = lines.clone();
+        for (bad, what) in [
+            (format!("{} 7", lines[k]), "an extra value"),
+            (
+                lines[k].rsplit_once(' ').unwrap().0.to_string(),
+                "a missing value",
+            ),
+            (lines[k].replacen(' ', " x ", 1), "a word"),
+        ] {
+            wrong[k] = bad;
+            let e = load_text(&file(&wrong)).unwrap_err();
+            // The last row's missing value is met at the end of the file, after its line break.
+            let at = if k + 1 == lines.len() && what == "a missing value" {
+                line + 1
+            } else {
+                line
+            };
+            assert_eq!(e.line(), Some(at), "{what} on line {line}: {e}");
+        }
+    }
+    // A row too many after the last, and a body that stops among the vertices.
+    let e = load_text(&(file(&lines) + "3 0 1 2 0\n")).unwrap_err();
+    assert_eq!(
+        e.message,
+        "expected the end of the file after the last element, found \"3\""
+    );
+    let e = load_text(&file(&lines[..25])).unwrap_err();
+    assert_eq!(
+        e.message,
+        "expected the x coordinate of vertex 25, found the end of the file"
+    );
 }
