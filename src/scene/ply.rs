@@ -58,9 +58,10 @@ fn read(path: &Path, reader: Box<dyn Read + Send>, threads: Threads) -> Result<M
         // The body starts right after the line break of `end_header`.
         lx.skip_line()?;
     }
+    // On a pool of one thread, pieces would only add the cutting.
     match threads {
-        Threads::All => split::read(lx, &header),
-        Threads::One => split::read_whole(lx, &header),
+        Threads::All if rayon::current_num_threads() > 1 => split::read(lx, &header),
+        _ => split::read_whole(lx, &header),
     }
 }
 
