@@ -54,16 +54,25 @@ impl MeshData {
     /// Appends `part`, read apart from this mesh: its vertices after this mesh's, its triangles as they
     /// are (they index the vertices of both).
     fn append(&mut self, part: MeshData) {
-        self.positions.extend_from_slice(&part.positions);
-        self.normals.extend_from_slice(&part.normals);
         if !(self.normal_triangles.is_empty() && part.normal_triangles.is_empty()) {
             // Either side may have no smooth triangle, and so no list: its triangles are flat.
             self.normal_triangles.resize(self.triangles.len(), None);
-            self.normal_triangles.extend_from_slice(&part.normal_triangles);
             let count = self.triangles.len() + part.triangles.len();
+            join(&mut self.normal_triangles, part.normal_triangles);
             self.normal_triangles.resize(count, None);
         }
-        self.triangles.extend_from_slice(&part.triangles);
+        join(&mut self.positions, part.positions);
+        join(&mut self.normals, part.normals);
+        join(&mut self.triangles, part.triangles);
+    }
+}
+
+/// `b` after `a`; moved, not copied, when `a` is empty (a mesh's first part).
+fn join<T>(a: &mut Vec<T>, mut b: Vec<T>) {
+    if a.is_empty() {
+        *a = b;
+    } else {
+        a.append(&mut b);
     }
 }
 

@@ -61,7 +61,11 @@ fn read(path: &Path, reader: Box<dyn Read + Send>, threads: Threads) -> Result<M
     // On a pool of one thread, pieces would only add the cutting.
     match threads {
         Threads::All if rayon::current_num_threads() > 1 => split::read(lx, &header),
-        _ => split::read_whole(lx, &header),
+        _ => {
+            let mut mesh = MeshData::default();
+            read_rest(&mut lx, &header, RowAt::default(), &mut mesh)?;
+            Ok(mesh)
+        }
     }
 }
 
@@ -495,15 +499,29 @@ struct RowAt {
     row: u64,
 }
 
-/// The body from `from` to its end, appended to `mesh`, and the check that nothing follows it.
-fn read_rest(body: &mut impl Body, header: &Header, from: RowAt, mesh: &mut MeshData) -> Result<()> {
-    for (index, element) in header.elements.iter().enumerate().skip(from.element) {
-        let first = if index == from.element { from.row } else { 0 };
-        let mut part = MeshData::default();
-        read_rows(body, header, index, first..element.count, mesh, &mut part)?;
-        mesh.append(part);
+/// The body from `from` to the end of `lx`'s stream, appended to `mesh`, and the check that nothing
+/// follows it.
+fn read_rest(lx: &mut Lexer, header: &Header, from: RowAt, mesh: &mut MeshData) -> Result<()> {
+    match header.format {
+        Format::Ascii => read_body(&mut Ascii::new(lx, false), header, from, mesh),
+        Format::Binary { big_endian } => read_body(&mut Binary::new(lx, big_endian), header, from, mesh),
     }
-    body.finish()
+}
+
+fn read_body(body: &mut impl Body, header: &Header, from: RowAt, mesh: &mut MeshData) -> Result<()> {
+    // The faces read the vertices, so they go apart and join the mesh at the end.
+    let mut faces = MeshData::default();
+    for (index, element) in header.elements.iter().enumerate().skip(from.element) {
+        let rows = if index == from.element { from.row } else { 0 }..element.count;
+        if index == header.face {
+            read_rows(body, header, index, rows, mesh, &mut faces)?;
+        } else {
+            read_rows(body, header, index, rows, &MeshData::default(), mesh)?;
+        }
+    }
+    body.finish()?;
+    mesh.append(faces);
+    Ok(())
 }
 
 /// The rows `rows` of element `index`, appended to `out`. A face's vertices are those of `vertices`,

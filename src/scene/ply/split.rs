@@ -36,13 +36,6 @@ pub(super) fn read(lx: Lexer, header: &Header) -> Result<MeshData> {
     read_in_windows(lx, header, WINDOW)
 }
 
-/// Reads the body after the header `lx` has read as one piece, on the calling thread.
-pub(super) fn read_whole(lx: Lexer, header: &Header) -> Result<MeshData> {
-    let path = lx.path().to_path_buf();
-    let last = Split::new(lx, header, WINDOW).last_with_reader();
-    last.read(&path, header, MeshData::default())
-}
-
 /// Reads the body in windows of `window` bytes (tests take small ones, to cut many pieces).
 pub(super) fn read_in_windows(lx: Lexer, header: &Header, window: usize) -> Result<MeshData> {
     // Each batch is read while the next is cut.
@@ -113,15 +106,7 @@ struct Last {
 impl Last {
     fn read(self, path: &Path, header: &Header, mut mesh: MeshData) -> Result<MeshData> {
         let mut lx = Lexer::resume(path, self.reader, self.at);
-        match header.format {
-            Format::Ascii => read_rest(&mut Ascii::new(&mut lx, false), header, self.from, &mut mesh)?,
-            Format::Binary { big_endian } => read_rest(
-                &mut Binary::new(&mut lx, big_endian),
-                header,
-                self.from,
-                &mut mesh,
-            )?,
-        }
+        read_rest(&mut lx, header, self.from, &mut mesh)?;
         Ok(mesh)
     }
 }
